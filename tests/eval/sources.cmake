@@ -1,1 +1,0 @@
-set(SEMLIO_TESTS_eval)

@@ -1,0 +1,1 @@
+set(SEMLIO_TESTS_io_cloud)

@@ -1,0 +1,1 @@
+set(SEMLIO_TESTS_lie_lie lie/test_se3_smoke.cpp)

@@ -1,1 +1,0 @@
-set(SEMLIO_TESTS_lie lie/test_se3_smoke.cpp)

@@ -1,0 +1,1 @@
+set(SEMLIO_TESTS_solve_solve)
