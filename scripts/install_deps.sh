@@ -3,7 +3,7 @@
 # Usage: scripts/install_deps.sh [extra-package ...]   (run as root, or with sudo available)
 set -euo pipefail
 
-packages=(build-essential cmake libeigen3-dev libnanoflann-dev catch2 libbenchmark-dev "$@")
+packages=(build-essential cmake libeigen3-dev libnanoflann-dev catch2 libbenchmark-dev libcli11-dev libyaml-cpp-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

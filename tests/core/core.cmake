@@ -1,1 +1,1 @@
-set(SEMLIO_TESTS_core_core)
+set(SEMLIO_TESTS_core_core core/test_labels.cpp core/test_scan.cpp)

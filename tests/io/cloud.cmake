@@ -1,1 +1,2 @@
-set(SEMLIO_TESTS_io_cloud)
+# PCD and PLY point-cloud readers/writers (include/semlio/io/pcd.hpp, ply.hpp).
+set(SEMLIO_TESTS_io_cloud io/test_pcd.cpp io/test_ply.cpp)

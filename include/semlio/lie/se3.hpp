@@ -142,10 +142,14 @@ class SE3 {
     Scalar c1;  // (t - sin t) / t^3
     Scalar c2;  // (t^2 + 2 cos t - 2) / (2 t^4)
     Scalar c3;  // (2 t - 3 sin t + t cos t) / (2 t^5)
-    if (theta < SO3<Scalar>::kSmallAngle) {
-      c1 = Scalar(1) / Scalar(6) - theta2 / Scalar(120);
-      c2 = Scalar(1) / Scalar(24) - theta2 / Scalar(720);
-      c3 = Scalar(1) / Scalar(120) - theta2 / Scalar(2520);
+    // The closed forms cancel catastrophically (c2 loses ~eps/t^4), so the
+    // series (through t^4) is used up to a larger, precision-dependent angle.
+    const Scalar series_below = sizeof(Scalar) <= 4 ? Scalar(0.3) : Scalar(0.02);
+    if (theta < series_below) {
+      const Scalar theta4 = theta2 * theta2;
+      c1 = Scalar(1) / Scalar(6) - theta2 / Scalar(120) + theta4 / Scalar(5040);
+      c2 = Scalar(1) / Scalar(24) - theta2 / Scalar(720) + theta4 / Scalar(40320);
+      c3 = Scalar(1) / Scalar(120) - theta2 / Scalar(2520) + theta4 / Scalar(120960);
     } else {
       const Scalar s = std::sin(theta);
       const Scalar c = std::cos(theta);

@@ -122,7 +122,8 @@ class SO3 {
       a = Scalar(0.5) - theta2 / Scalar(24);
       b = Scalar(1) / Scalar(6) - theta2 / Scalar(120);
     } else {
-      a = (Scalar(1) - std::cos(theta)) / theta2;
+      const Scalar s = std::sin(theta / Scalar(2)) / theta;  // no cancellation, unlike 1 - cos
+      a = Scalar(2) * s * s;
       b = (theta - std::sin(theta)) / (theta2 * theta);
     }
     return Matrix3::Identity() - a * K + b * K * K;

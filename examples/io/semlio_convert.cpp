@@ -1,0 +1,80 @@
+// semlio_convert: converts point clouds between KITTI .bin, PCD and PLY
+// (by file extension). Labels travel where the formats carry them (PCD/PLY
+// label field; a KITTI .label beside the .bin with --labels FILE).
+//
+//   semlio_convert IN OUT [--labels IN.label] [--ascii]
+
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <string>
+
+#include <semlio/io/kitti.hpp>
+#include <semlio/io/pcd.hpp>
+#include <semlio/io/ply.hpp>
+
+namespace {
+
+std::string extension(const std::string& path) {
+  std::string e = std::filesystem::path(path).extension().string();
+  for (auto& c : e) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return e;
+}
+
+int usage() {
+  std::cerr << "usage: semlio_convert IN OUT [--labels IN.label] [--ascii]\n"
+               "  formats by extension: .bin (KITTI), .pcd, .ply\n";
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) return usage();
+  const std::string in = argv[1];
+  const std::string out = argv[2];
+  std::optional<std::string> labels;
+  bool ascii = false;
+  for (int i = 3; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--labels") == 0 && i + 1 < argc) {
+      labels = argv[++i];
+    } else if (std::strcmp(argv[i], "--ascii") == 0) {
+      ascii = true;
+    } else {
+      return usage();
+    }
+  }
+  try {
+    semlio::io::ReadStats stats;
+    semlio::Scan scan;
+    const std::string ein = extension(in);
+    if (ein == ".bin") {
+      scan = semlio::io::read_kitti_scan(in, labels, &stats);
+    } else if (ein == ".pcd") {
+      scan = semlio::io::read_pcd(in, &stats);
+    } else if (ein == ".ply") {
+      scan = semlio::io::read_ply(in, &stats);
+    } else {
+      return usage();
+    }
+    const std::string eout = extension(out);
+    if (eout == ".bin") {
+      semlio::io::write_kitti_bin(out, scan);
+    } else if (eout == ".pcd") {
+      semlio::io::write_pcd(out, scan, ascii ? semlio::io::PcdEncoding::kAscii : semlio::io::PcdEncoding::kBinary);
+    } else if (eout == ".ply") {
+      semlio::io::write_ply(out, scan, ascii ? semlio::io::PlyEncoding::kAscii
+                                            : semlio::io::PlyEncoding::kBinaryLittleEndian);
+    } else {
+      return usage();
+    }
+    std::cout << "semlio_convert: " << in << " -> " << out << ": " << scan.size() << " points ("
+              << stats.dropped_nonfinite << " non-finite and " << stats.dropped_zero
+              << " (0,0,0) points dropped)\n";
+    return 0;
+  } catch (const semlio::Error& e) {
+    std::cerr << "semlio_convert: " << e.what() << "\n";
+    return 1;
+  }
+}

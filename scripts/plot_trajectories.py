@@ -1,0 +1,66 @@
+#!/usr/bin/python3
+"""Top-view plot of KITTI-format trajectories (3x4 row-major per line).
+
+usage: plot_trajectories.py OUT.png --gt GT.txt NAME=EST.txt [NAME=EST.txt ...]
+       [--frame camera|lidar] [--title TEXT]
+
+Camera-frame poses (KITTI convention) are drawn as x (right) vs z (forward);
+lidar-frame poses as x (forward) vs y (left). Needs python3-matplotlib.
+"""
+import argparse
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def positions(path):
+    xs, ys, zs = [], [], []
+    with open(path) as f:
+        for line_no, line in enumerate(f, 1):
+            v = line.split()
+            if not v:
+                continue
+            if len(v) != 12:
+                sys.exit(f"{path}:{line_no}: expected 12 numbers, got {len(v)}")
+            xs.append(float(v[3]))
+            ys.append(float(v[7]))
+            zs.append(float(v[11]))
+    return xs, ys, zs
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("estimates", nargs="+", help="NAME=PATH")
+    ap.add_argument("--gt")
+    ap.add_argument("--frame", choices=["camera", "lidar"], default="camera")
+    ap.add_argument("--title", default="")
+    a = ap.parse_args()
+
+    fig, ax = plt.subplots(figsize=(8, 8))
+    def draw(path, label, **kw):
+        x, y, z = positions(path)
+        if a.frame == "camera":
+            ax.plot(x, z, label=label, **kw)
+        else:
+            ax.plot(x, y, label=label, **kw)
+    if a.gt:
+        draw(a.gt, "ground truth", color="black", linewidth=2.0)
+    for item in a.estimates:
+        name, _, path = item.partition("=")
+        draw(path, name, linewidth=1.2)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("z [m]" if a.frame == "camera" else "y [m]")
+    ax.set_title(a.title or "trajectories (top view)")
+    ax.grid(True, alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(a.out, dpi=110)
+
+
+if __name__ == "__main__":
+    main()
