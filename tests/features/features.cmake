@@ -1,1 +1,9 @@
-set(SEMLIO_TESTS_features_features)
+# Features and search area: preprocessing, rings, LOAM features, PCA, k-d tree,
+# voxel grid (paths relative to tests/).
+set(SEMLIO_TESTS_features_features
+  features/test_pca.cpp
+  features/test_rings.cpp
+  features/test_preprocess.cpp
+  features/test_loam_features.cpp
+  search/test_kdtree.cpp
+  search/test_voxel_grid.cpp)

@@ -1,0 +1,188 @@
+#pragma once
+/// \file
+/// Ring (beam) inference, per-point time from azimuth, and KITTI's
+/// vertical-angle correction -- what KITTI .bin scans lack (METHOD.md "Rings
+/// for KITTI", "KITTI intrinsic fix").
+///
+/// Azimuth convention: az = atan2(y, x) in the sensor frame (x forward, y left,
+/// z up), so it grows counter-clockwise seen from above.
+///
+/// KITTI point order, verified on tests/data/kitti (odometry 00/000000-1 and
+/// the raw snippet): the .bin holds the 64 rings one after the other, the
+/// highest beam first; within a ring az mod 2pi grows from ~0 (straight ahead)
+/// to ~2pi, i.e. the HDL-64E as stored turns counter-clockwise and each sweep
+/// starts and ends facing forward. In the raw (not motion-compensated)
+/// snippet, upper-beam points at the end of a ring are ~0.8 m closer than at
+/// its start for objects straight ahead while the car drives ~0.8 m per
+/// sweep: file order is time order. Hence the KITTI time default: t = period
+/// * (az mod 2pi) / 2pi.
+///
+/// The 32-beam real scan pair (tests/data/scan_pair) is stored differently:
+/// column by column (32 interleaved beams per firing), clockwise from +y, with
+/// elevations exactly on the HDL-32E table; there rings come from elevation.
+
+#include <Eigen/Core>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <semlio/core/error.hpp>
+#include <semlio/core/scan.hpp>
+#include <semlio/features/sensor_model.hpp>
+
+namespace semlio {
+
+/// How rings are inferred.
+enum class RingMethod : std::uint8_t {
+  kAuto,        ///< point order when it yields exactly sensor.beams() rings, else elevation
+  kPointOrder,  ///< azimuth wrap-around in point order (KITTI .bin); throws if the count mismatches
+  kElevation,   ///< nearest beam of the sensor table by elevation
+};
+
+/// Settings of infer_rings().
+struct RingConfig {
+  RingMethod method = RingMethod::kAuto;  ///< see RingMethod
+};
+
+/// What infer_rings() did.
+struct RingReport {
+  RingMethod used = RingMethod::kElevation;  ///< kPointOrder or kElevation
+  std::size_t order_rings = 0;               ///< rings found from point order (0 if not tried)
+};
+
+/// Settings of assign_times_from_azimuth(). Defaults: KITTI (see file comment).
+struct PointTimeConfig {
+  double sweep_period_s = 0.1;       ///< duration of one sweep (10 Hz) [s]
+  double start_azimuth_rad = 0.0;    ///< azimuth where a sweep starts (t = 0) [rad]
+  bool counter_clockwise = true;     ///< direction of rotation seen from above
+};
+
+/// KISS-ICP / CT-ICP's KITTI vertical-angle correction [rad] (0.205 deg).
+inline constexpr double kKittiVerticalCorrectionRad = 0.205 * std::numbers::pi / 180.0;
+
+namespace detail {
+
+/// Azimuth in [0, 2pi).
+inline double azimuth_0_2pi(const Eigen::Vector3f& p) {
+  const double a = std::atan2(static_cast<double>(p.y()), static_cast<double>(p.x()));
+  return a < 0.0 ? a + 2.0 * std::numbers::pi : a;
+}
+
+}  // namespace detail
+
+/// Start index of every ring found in point order: a new ring starts where az
+/// mod 2pi drops by more than pi, once the current ring has reached the rear
+/// half (az in (pi/2, 3pi/2)) -- so a stray point just below 2pi at a ring's
+/// start cannot split it. begins is cleared; begins[0] = 0 when pts is not empty.
+inline void ring_starts_from_order(const std::vector<Eigen::Vector3f>& pts,
+                                   std::vector<std::size_t>& begins) {
+  begins.clear();
+  if (pts.empty()) return;
+  begins.push_back(0);
+  constexpr double kPi = std::numbers::pi;
+  bool passed_rear = false;
+  double prev = detail::azimuth_0_2pi(pts[0]);
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    if (prev > kPi / 2.0 && prev < 1.5 * kPi) passed_rear = true;
+    const double s = detail::azimuth_0_2pi(pts[i]);
+    if (s < prev - kPi && passed_rear) {
+      begins.push_back(i);
+      passed_rear = false;
+    }
+    prev = s;
+  }
+}
+
+/// Fills scan.rings (0 = lowest beam) by config.method. Throws ConfigError for
+/// an invalid sensor and ValueError when kPointOrder finds a ring count other
+/// than sensor.beams() (the message names both counts).
+inline RingReport infer_rings(Scan& scan, const SensorModel& sensor, const RingConfig& config = {}) {
+  sensor.validate();
+  RingReport report;
+  scan.rings.resize(scan.size());
+  if (config.method != RingMethod::kElevation) {
+    std::vector<std::size_t> begins;
+    ring_starts_from_order(scan.points, begins);
+    report.order_rings = begins.size();
+    if (begins.size() == sensor.beams()) {
+      // Orient: the stored order may run top-down (KITTI) or bottom-up.
+      const auto mean_sin_elevation = [&](std::size_t b, std::size_t e) {
+        double s = 0.0;
+        for (std::size_t i = b; i < e; ++i) {
+          const double n = static_cast<double>(scan.points[i].norm());
+          if (n > 0.0) s += static_cast<double>(scan.points[i].z()) / n;
+        }
+        return s / static_cast<double>(e - b);
+      };
+      const std::size_t r = begins.size();
+      const bool top_down = mean_sin_elevation(0, begins.size() > 1 ? begins[1] : scan.size()) >
+                            mean_sin_elevation(begins[r - 1], scan.size());
+      for (std::size_t k = 0; k < r; ++k) {
+        const std::size_t e = (k + 1 < r) ? begins[k + 1] : scan.size();
+        const auto ring = static_cast<std::uint16_t>(top_down ? r - 1 - k : k);
+        for (std::size_t i = begins[k]; i < e; ++i) scan.rings[i] = ring;
+      }
+      report.used = RingMethod::kPointOrder;
+      return report;
+    }
+    if (config.method == RingMethod::kPointOrder) {
+      scan.rings.clear();
+      throw ValueError("infer_rings: point order gives " + std::to_string(begins.size()) +
+                       " rings but the sensor has " + std::to_string(sensor.beams()) + " beams");
+    }
+  }
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const Eigen::Vector3f& p = scan.points[i];
+    const double h = std::hypot(static_cast<double>(p.x()), static_cast<double>(p.y()));
+    scan.rings[i] = sensor.nearest_ring(std::atan2(static_cast<double>(p.z()), h));
+  }
+  report.used = RingMethod::kElevation;
+  return report;
+}
+
+/// Fills scan.times_s with each point's time since sweep start from its
+/// azimuth: t = period * frac(+-(az - start) / 2pi), in [0, period). Only for
+/// sensors whose sweep is one revolution (every spinning lidar).
+inline void assign_times_from_azimuth(Scan& scan, const PointTimeConfig& config = {}) {
+  if (!(config.sweep_period_s > 0.0) || !std::isfinite(config.sweep_period_s)) {
+    throw ConfigError("PointTimeConfig.sweep_period_s must be positive, got " +
+                      std::to_string(config.sweep_period_s));
+  }
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  scan.times_s.resize(scan.size());
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const Eigen::Vector3f& p = scan.points[i];
+    double turned = std::atan2(static_cast<double>(p.y()), static_cast<double>(p.x())) -
+                    config.start_azimuth_rad;
+    if (!config.counter_clockwise) turned = -turned;
+    double frac = turned / kTwoPi;
+    frac -= std::floor(frac);
+    if (frac >= 1.0) frac = 0.0;  // rounding at the seam
+    scan.times_s[i] = static_cast<float>(frac * config.sweep_period_s);
+  }
+}
+
+/// Rotates point p about the horizontal axis perpendicular to its azimuth,
+/// (y, -x, 0) / ||(x, y)||, by angle_rad: its elevation grows by angle_rad while
+/// range and azimuth stay. Points on the z axis are returned unchanged.
+inline Eigen::Vector3f correct_vertical_angle(const Eigen::Vector3f& p, double angle_rad) {
+  const Eigen::Vector3d q = p.cast<double>();
+  const double h = std::hypot(q.x(), q.y());
+  if (!(h > 0.0)) return p;
+  // Rodrigues with axis a = (y, -x, 0)/h, a.p = 0: p' = p cos + (a x p) sin,
+  // a x p = (-x z / h, -y z / h, h).
+  const Eigen::Vector3d axp(-q.x() * q.z() / h, -q.y() * q.z() / h, h);
+  return (q * std::cos(angle_rad) + axp * std::sin(angle_rad)).cast<float>();
+}
+
+/// KITTI's intrinsic fix (METHOD.md): raises every point's elevation by
+/// angle_rad (default 0.205 deg as KISS-ICP and CT-ICP; IMLS-SLAM uses 0.195).
+inline void correct_kitti_vertical_angle(Scan& scan, double angle_rad = kKittiVerticalCorrectionRad) {
+  for (Eigen::Vector3f& p : scan.points) p = correct_vertical_angle(p, angle_rad);
+}
+
+}  // namespace semlio

@@ -1,0 +1,180 @@
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cstdint>
+#include <functional>
+#include <numeric>
+#include <random>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include <semlio/search/kdtree.hpp>
+
+namespace {
+
+using Eigen::Vector3f;
+
+/// Squared distance summed in the same order as nanoflann's L2 metric, so that
+/// float ties are reproduced bit for bit.
+float sq(const Vector3f& a, const Vector3f& b) {
+  float s = 0.0F;
+  for (int i = 0; i < 3; ++i) {
+    const float d = a[i] - b[i];
+    s += d * d;
+  }
+  return s;
+}
+
+/// Brute force: all indices sorted by (squared distance, index).
+std::vector<std::pair<float, std::uint32_t>> brute(const std::vector<Vector3f>& pts,
+                                                   const Vector3f& q) {
+  std::vector<std::pair<float, std::uint32_t>> all;
+  for (std::uint32_t i = 0; i < pts.size(); ++i) all.emplace_back(sq(q, pts[i]), i);
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+std::vector<Vector3f> random_cloud(std::size_t n, std::mt19937& rng, float extent) {
+  std::uniform_real_distribution<float> u(-extent, extent);
+  std::vector<Vector3f> pts(n);
+  for (auto& p : pts) p = Vector3f(u(rng), u(rng), u(rng));
+  return pts;
+}
+
+void check_queries(const semlio::KdTree3f& tree, const std::vector<Vector3f>& pts,
+                   const Vector3f& q) {
+  const auto ref = brute(pts, q);
+  for (std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{15}, pts.size() + 3}) {
+    std::vector<std::uint32_t> idx(k);
+    std::vector<float> d(k);
+    const std::size_t n = tree.knn(q, k, idx.data(), d.data());
+    REQUIRE(n == std::min(k, pts.size()));
+    for (std::size_t i = 0; i < n; ++i) {
+      CHECK(idx[i] == ref[i].second);
+      CHECK(d[i] == ref[i].first);
+    }
+  }
+  for (float r : {0.0F, 0.3F, 1.0F, 2.5F}) {
+    std::vector<std::uint32_t> out;
+    std::vector<float> dist;
+    tree.radius(q, r, out, dist);
+    std::vector<std::uint32_t> expected;
+    std::vector<float> expected_dist;
+    for (const auto& [dd, i] : ref) {
+      if (dd <= r * r) {
+        expected.push_back(i);
+        expected_dist.push_back(dd);
+      }
+    }
+    CHECK(out == expected);
+    CHECK(dist == expected_dist);
+    std::vector<std::uint32_t> only;
+    tree.radius(q, r, only);
+    CHECK(only == expected);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("KdTree3f knn and radius equal brute force on random clouds", "[search]") {
+  std::mt19937 rng(1);
+  for (std::size_t n : {std::size_t{1}, std::size_t{7}, std::size_t{200}, std::size_t{3000}}) {
+    const auto pts = random_cloud(n, rng, 5.0F);
+    const semlio::KdTree3f tree(pts);
+    REQUIRE(tree.size() == n);
+    const auto queries = random_cloud(30, rng, 6.0F);
+    for (const auto& q : queries) check_queries(tree, pts, q);
+    check_queries(tree, pts, pts[0]);  // query on a point: itself first at distance 0
+  }
+}
+
+TEST_CASE("KdTree3f ties in distance come in ascending index order", "[search]") {
+  // A 5x5x5 integer grid, duplicated: every distance is repeated many times and
+  // every point exists twice; the k-th place cut picks the lowest indices.
+  std::vector<Vector3f> pts;
+  for (int rep = 0; rep < 2; ++rep) {
+    for (int x = 0; x < 5; ++x) {
+      for (int y = 0; y < 5; ++y) {
+        for (int z = 0; z < 5; ++z) {
+          pts.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+        }
+      }
+    }
+  }
+  std::mt19937 rng(3);
+  std::shuffle(pts.begin(), pts.end(), rng);
+  const semlio::KdTree3f tree(pts, 2);  // small leaves: ties cross many nodes
+  for (const Vector3f& q : {Vector3f(2, 2, 2), Vector3f(0, 0, 0), Vector3f(2.5F, 2.5F, 2.5F),
+                           Vector3f(1, 2, 0.5F)}) {
+    check_queries(tree, pts, q);
+    std::uint32_t idx[7];
+    float d[7];
+    REQUIRE(tree.knn(q, 7, idx, d) == 7);
+    for (int i = 1; i < 7; ++i) {
+      CHECK((d[i - 1] < d[i] || (d[i - 1] == d[i] && idx[i - 1] < idx[i])));
+    }
+  }
+}
+
+TEST_CASE("KdTree3f empty, rebuilt, copied and moved trees", "[search]") {
+  semlio::KdTree3f empty;
+  std::uint32_t idx[3] = {7, 7, 7};
+  float d[3] = {};
+  CHECK(empty.knn(Vector3f::Zero(), 3, idx, d) == 0);
+  std::vector<std::uint32_t> out{1, 2};
+  empty.radius(Vector3f::Zero(), 10.0F, out);
+  CHECK(out.empty());
+  CHECK(empty.empty());
+
+  semlio::KdTree3f built(std::vector<Vector3f>{});
+  CHECK(built.knn(Vector3f::Zero(), 3, idx, d) == 0);
+
+  std::mt19937 rng(5);
+  auto pts = random_cloud(100, rng, 2.0F);
+  semlio::KdTree3f tree;
+  tree.build(pts);
+  CHECK(tree.knn(Vector3f::Zero(), 0, idx, d) == 0);
+  const semlio::KdTree3f copy = tree;
+  const semlio::KdTree3f moved = std::move(tree);
+  pts[0] = Vector3f(100, 100, 100);  // the tree owns a copy: no effect
+  const auto ref = brute(copy.points(), Vector3f(1, 1, 1));
+  REQUIRE(copy.knn(Vector3f(1, 1, 1), 3, idx, d) == 3);
+  CHECK(idx[0] == ref[0].second);
+  REQUIRE(moved.knn(Vector3f(1, 1, 1), 3, idx, d) == 3);
+  CHECK(idx[0] == ref[0].second);
+
+  // Rebuild with different content replaces the old.
+  semlio::KdTree3f re(pts);
+  re.build(std::vector<Vector3f>{Vector3f(1, 0, 0)});
+  REQUIRE(re.knn(Vector3f::Zero(), 3, idx, d) == 1);
+  CHECK(idx[0] == 0);
+  CHECK(d[0] == 1.0F);
+  re.radius(Vector3f::Zero(), -1.0F, out);
+  CHECK(out.empty());
+}
+
+TEST_CASE("KdTree3f concurrent const queries agree with serial ones", "[search]") {
+  std::mt19937 rng(8);
+  const auto pts = random_cloud(5000, rng, 10.0F);
+  const auto queries = random_cloud(2000, rng, 10.0F);
+  const semlio::KdTree3f tree(pts);
+  const auto run = [&](std::size_t begin, std::size_t end, std::vector<std::uint32_t>& firsts) {
+    std::uint32_t idx[5];
+    float d[5];
+    std::vector<std::uint32_t> near;
+    for (std::size_t q = begin; q < end; ++q) {
+      tree.knn(queries[q], 5, idx, d);
+      tree.radius(queries[q], 1.0F, near);
+      firsts[q] = idx[0] + static_cast<std::uint32_t>(near.size()) * 100000U;
+    }
+  };
+  std::vector<std::uint32_t> serial(queries.size());
+  run(0, queries.size(), serial);
+  std::vector<std::uint32_t> parallel(queries.size());
+  std::thread a(run, 0, queries.size() / 2, std::ref(parallel));
+  std::thread b(run, queries.size() / 2, queries.size(), std::ref(parallel));
+  a.join();
+  b.join();
+  CHECK(parallel == serial);
+}

@@ -1,0 +1,119 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <random>
+#include <set>
+#include <tuple>
+#include <vector>
+
+#include <semlio/io/kitti.hpp>
+#include <semlio/search/voxel_grid.hpp>
+#include <semlio_test/data.hpp>
+
+using semlio::Class;
+using Eigen::Vector3f;
+
+TEST_CASE("VoxelGrid centroid, first point, majority label and order", "[search]") {
+  // leaf 1 m; voxel A = [0,1)^3, voxel B = [-1,0) x [0,1) x [0,1).
+  const std::vector<Vector3f> pts = {
+      {0.5F, 0.5F, 0.5F},    // 0 A
+      {-0.5F, 0.5F, 0.5F},   // 1 B
+      {0.1F, 0.2F, 0.3F},    // 2 A
+      {-0.1F, 0.9F, 0.1F},   // 3 B
+      {0.9F, 0.8F, 0.7F},    // 4 A
+      {5.0F, 5.0F, 5.0F},    // 5 C alone
+  };
+  const std::vector<Class> labels = {Class::kRoad, Class::kCar, Class::kCar, Class::kBuilding,
+                                     Class::kCar, Class::kPole};
+  std::vector<Vector3f> out;
+  std::vector<Class> out_labels;
+  std::vector<std::uint32_t> first;
+  SECTION("centroid") {
+    semlio::VoxelGrid grid({.leaf_size_m = 1.0});
+    grid.downsample(pts, labels, out, out_labels, first);
+    REQUIRE(out.size() == 3);
+    CHECK(first == std::vector<std::uint32_t>{0, 1, 5});  // ascending first index
+    CHECK((out[0] - Vector3f(0.5F, 0.5F, 0.5F)).norm() < 1e-6F);
+    CHECK((out[1] - Vector3f(-0.3F, 0.7F, 0.3F)).norm() < 1e-6F);
+    CHECK(out[2] == pts[5]);
+    CHECK(out_labels[0] == Class::kCar);       // car 2 : road 1
+    CHECK(out_labels[1] == Class::kCar);       // tie car (1) / building (13): lowest id
+    CHECK(out_labels[2] == Class::kPole);
+  }
+  SECTION("first point") {
+    semlio::VoxelGrid grid({.leaf_size_m = 1.0, .point = semlio::VoxelPoint::kFirst});
+    grid.downsample(pts, {}, out, out_labels, first);
+    REQUIRE(out.size() == 3);
+    CHECK(out[0] == pts[0]);
+    CHECK(out[1] == pts[1]);
+    CHECK(out_labels.empty());
+  }
+  SECTION("subset, indices refer to the full cloud") {
+    semlio::VoxelGrid grid({.leaf_size_m = 1.0});
+    grid.downsample(pts, labels, std::vector<std::uint32_t>{4, 2, 3}, out, out_labels, first);
+    REQUIRE(out.size() == 2);
+    CHECK(first == std::vector<std::uint32_t>{2, 3});
+    CHECK((out[0] - Vector3f(0.5F, 0.5F, 0.5F)).norm() < 1e-6F);
+    CHECK(out[1] == pts[3]);
+  }
+}
+
+TEST_CASE("VoxelGrid counts voxels like brute force; skips non-finite; rejects bad leaves", "[search]") {
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<float> u(-10.0F, 10.0F);
+  std::vector<Vector3f> pts(5000);
+  for (auto& p : pts) p = Vector3f(u(rng), u(rng), u(rng));
+  pts[17] = Vector3f(std::numeric_limits<float>::quiet_NaN(), 0.0F, 0.0F);
+  const double leaf = 1.5;
+  std::set<std::tuple<long, long, long>> cells;
+  std::map<std::tuple<long, long, long>, std::uint32_t> first_of;
+  for (std::uint32_t i = 0; i < pts.size(); ++i) {
+    if (!pts[i].allFinite()) continue;
+    const auto key = std::make_tuple(static_cast<long>(std::floor(static_cast<double>(pts[i].x()) / leaf)),
+                                     static_cast<long>(std::floor(static_cast<double>(pts[i].y()) / leaf)),
+                                     static_cast<long>(std::floor(static_cast<double>(pts[i].z()) / leaf)));
+    cells.insert(key);
+    first_of.emplace(key, i);
+  }
+  semlio::VoxelGrid grid({.leaf_size_m = leaf, .point = semlio::VoxelPoint::kFirst});
+  std::vector<Vector3f> out;
+  std::vector<Class> out_labels;
+  std::vector<std::uint32_t> first;
+  grid.downsample(pts, {}, out, out_labels, first);
+  CHECK(out.size() == cells.size());
+  std::set<std::uint32_t> expected_first;
+  for (const auto& [k, i] : first_of) expected_first.insert(i);
+  CHECK(std::set<std::uint32_t>(first.begin(), first.end()) == expected_first);
+  // Reuse: a second call gives the same result.
+  std::vector<std::uint32_t> again;
+  grid.downsample(pts, {}, out, out_labels, again);
+  CHECK(again == first);
+  CHECK_THROWS_AS(semlio::VoxelGrid({.leaf_size_m = 0.0}), semlio::ConfigError);
+  CHECK_THROWS_AS(semlio::VoxelGrid({.leaf_size_m = std::nan("")}), semlio::ConfigError);
+  const std::vector<Class> wrong(3, Class::kCar);
+  CHECK_THROWS_AS(grid.downsample(pts, wrong, out, out_labels, first), semlio::ValueError);
+}
+
+TEST_CASE("VoxelGrid on the real KITTI scan", "[search]") {
+  const semlio::Scan scan =
+      semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  semlio::VoxelGrid grid({.leaf_size_m = 0.5});
+  std::vector<Vector3f> out;
+  std::vector<Class> out_labels;
+  std::vector<std::uint32_t> first;
+  grid.downsample(scan.points, {}, out, out_labels, first);
+  CHECK(out.size() < scan.size() / 2);
+  CHECK(out.size() > 10000);
+  // One output per voxel: keys of the first points are unique, and each
+  // centroid lies inside its voxel.
+  std::set<std::uint64_t> keys;
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    const std::uint64_t key = semlio::voxel_key(scan.points[first[k]], 2.0);
+    CHECK(keys.insert(key).second);
+    const Vector3f lo = (scan.points[first[k]] * 2.0F).array().floor().matrix() * 0.5F;
+    REQUIRE(((out[k] - lo).array() >= -1e-4F).all());
+    REQUIRE(((out[k] - lo).array() <= 0.5F + 1e-4F).all());
+  }
+}
