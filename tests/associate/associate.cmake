@@ -1,1 +1,5 @@
-set(SEMLIO_TESTS_associate_associate)
+# Local map, associators (Algorithm 1) and residuals (eq. 8-12).
+set(SEMLIO_TESTS_associate_associate
+  associate/test_associators.cpp
+  map/test_local_map.cpp
+  residual/test_residuals.cpp)

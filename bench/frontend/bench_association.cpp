@@ -1,0 +1,221 @@
+// Association kernel benchmarks: NearestK vs NormalConsistency vs the literal
+// NormalConsistencyReference, on a real KITTI scan (000001) against a local
+// map built from the neighbouring real scan (000000), and on the synthetic
+// street; plus the per-frame preparation, the local-map build, and residual +
+// Jacobian accumulation into 6x6 normal equations. Items = scan features.
+// scripts/bench_association.sh runs this and prints the ratios.
+#include <benchmark/benchmark.h>
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <semlio/associate/nearest_k.hpp>
+#include <semlio/associate/normal_consistency.hpp>
+#include <semlio/associate/normal_consistency_reference.hpp>
+#include <semlio/map/local_map.hpp>
+#include <semlio/residual/point_to_line.hpp>
+#include <semlio/residual/point_to_plane.hpp>
+#include <semlio/residual/robust.hpp>
+#include <semlio/residual/semantic_weighted.hpp>
+#include <semlio_test/associate_scenes.hpp>
+
+namespace {
+
+using semlio::SE3d;
+
+// One association problem: a built local map, the query features, a pose.
+struct Problem {
+  semlio::LocalMap map;
+  std::vector<Eigen::Vector3f> surfaces;
+  std::vector<Eigen::Vector3f> corners;
+  std::vector<semlio::Class> surface_labels;
+  SE3d T_map_scan;
+};
+
+// LOAM features of KITTI 00 scan 000001 against a local map of those of 000000.
+const Problem& kitti() {
+  static const Problem p = [] {
+    Problem q;
+    const auto map_features = semlio_test::kitti_features("kitti/sequences/00/velodyne/000000.bin");
+    const auto scan = semlio_test::kitti_features("kitti/sequences/00/velodyne/000001.bin");
+    q.map.add_keyframe(SE3d(), map_features.corners, map_features.surfaces);
+    q.map.build(Eigen::Vector3d::Zero());
+    q.surfaces = scan.surfaces.points;
+    q.corners = scan.corners.points;
+    q.surface_labels.assign(scan.surfaces.points.size(), semlio::Class::kUnlabeled);
+    q.T_map_scan = semlio_test::kitti_T_0_1();
+    return q;
+  }();
+  return p;
+}
+
+// Dense variant: every point of 000000 (0.2 m voxels) as map, of 000001
+// (0.4 m voxels) as features.
+const Problem& kitti_dense() {
+  static const Problem p = [] {
+    Problem q;
+    const auto map_cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.2);
+    const auto scan = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000001.bin", 0.4);
+    q.map.add_keyframe(SE3d(), map_cloud, map_cloud);
+    q.map.build(Eigen::Vector3d::Zero());
+    q.surfaces = scan.points;
+    q.surface_labels.assign(scan.points.size(), semlio::Class::kUnlabeled);
+    q.T_map_scan = semlio_test::kitti_T_0_1();
+    return q;
+  }();
+  return p;
+}
+
+const Problem& street() {
+  static const Problem p = [] {
+    Problem q;
+    const auto scene = semlio_test::street_scene(7);
+    q.map.add_keyframe(SE3d(), scene.map_corners, scene.map_surfaces);
+    q.map.build(Eigen::Vector3d::Zero());
+    q.surfaces = scene.scan_surfaces.points;
+    q.surface_labels = scene.scan_surfaces.labels;
+    q.corners = scene.scan_corners.points;
+    q.T_map_scan = scene.T_map_scan;
+    return q;
+  }();
+  return p;
+}
+
+enum class Kind { kSurfaces, kCorners };
+
+// Times associate() alone: per Gauss-Newton iteration cost. set_scan() (per
+// frame) is done once outside the loop and timed by BM_Prepare.
+template <typename A>
+void BM_Associate(benchmark::State& state, const Problem* (*problem)(), Kind kind) {
+  const Problem& p = *problem();
+  const auto& features = kind == Kind::kSurfaces ? p.surfaces : p.corners;
+  A associator;
+  associator.set_map(kind == Kind::kSurfaces ? p.map.surfaces() : p.map.corners());
+  associator.set_scan(features);
+  semlio::Correspondences out;
+  for (auto _ : state) {
+    associator.associate(p.T_map_scan, out);
+    benchmark::DoNotOptimize(out.data());
+    benchmark::ClobberMemory();
+  }
+  std::size_t matched = 0;
+  for (const auto& m : out) matched += m.count > 0 ? 1U : 0U;
+  state.counters["features"] = static_cast<double>(features.size());
+  state.counters["matched"] = static_cast<double>(matched);
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(features.size()));
+}
+
+// Per-frame preparation of NormalConsistency: scan k-d tree + scan-side axes.
+void BM_Prepare(benchmark::State& state, const Problem* (*problem)()) {
+  const Problem& p = *problem();
+  semlio::NormalConsistency nc;
+  nc.set_map(p.map.surfaces());
+  for (auto _ : state) {
+    nc.set_scan(p.surfaces);
+    benchmark::DoNotOptimize(nc.scan_axes().data());
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(p.surfaces.size()));
+}
+
+// Local map build from one keyframe (transform, voxelise, tree, cached axes
+// and candidate lists): LOAM features, or every point (dense).
+void BM_LocalMapBuild(benchmark::State& state, bool dense) {
+  semlio::LocalMap map;
+  std::size_t points = 0;
+  if (dense) {
+    const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.2);
+    map.add_keyframe(SE3d(), cloud, cloud);
+    points = 2 * cloud.points.size();
+  } else {
+    const auto f = semlio_test::kitti_features("kitti/sequences/00/velodyne/000000.bin");
+    map.add_keyframe(SE3d(), f.corners, f.surfaces);
+    points = f.corners.points.size() + f.surfaces.points.size();
+  }
+  for (auto _ : state) {
+    map.build(Eigen::Vector3d::Zero());
+    benchmark::DoNotOptimize(map.surfaces().axes().data());
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(points));
+}
+
+// Residual + Jacobian accumulation (H = sum w J^T J, g = sum w J^T r) over the
+// NormalConsistency matches of the KITTI surfaces: one Gauss-Newton build.
+template <typename R>
+void BM_Accumulate(benchmark::State& state) {
+  const Problem& p = kitti();
+  const semlio::FeatureMap& map = p.map.surfaces();
+  semlio::NormalConsistency nc;
+  nc.set_map(map);
+  nc.set_scan(p.surfaces);
+  semlio::Correspondences out;
+  nc.associate(p.T_map_scan, out);
+  std::vector<semlio::MatchedPoints> gathered(out.size());
+  for (std::size_t i = 0; i < out.size(); ++i) gathered[i] = map.gather(out[i]);
+  const R residual{};
+  std::size_t used = 0;
+  for (auto _ : state) {
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    used = 0;
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      if (out[i].count == 0) continue;
+      const semlio::FeaturePoint f{p.surfaces[i].cast<double>(), p.surface_labels[i]};
+      const auto term = residual.evaluate(f, gathered[i], p.T_map_scan);
+      if (!term.valid) continue;
+      H.noalias() += term.weight * term.J_r_xi.transpose() * term.J_r_xi;
+      g.noalias() += term.weight * term.J_r_xi.transpose() * term.r;
+      ++used;
+    }
+    benchmark::DoNotOptimize(H.data());
+    benchmark::DoNotOptimize(g.data());
+  }
+  state.counters["residuals"] = static_cast<double>(used);
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(out.size()));
+}
+
+const Problem* kitti_ptr() { return &kitti(); }
+const Problem* kitti_dense_ptr() { return &kitti_dense(); }
+const Problem* street_ptr() { return &street(); }
+
+void register_associators(const std::string& scene, const Problem* (*problem)(), Kind kind, bool reference) {
+  benchmark::RegisterBenchmark(("NearestK/" + scene).c_str(), BM_Associate<semlio::NearestK>, problem, kind)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark(("NormalConsistency/" + scene).c_str(), BM_Associate<semlio::NormalConsistency>,
+                               problem, kind)
+      ->Unit(benchmark::kMillisecond);
+  if (reference) {
+    benchmark::RegisterBenchmark(("NormalConsistencyReference/" + scene).c_str(),
+                                 BM_Associate<semlio::NormalConsistencyReference>, problem, kind)
+        ->Unit(benchmark::kMillisecond);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  register_associators("kitti_surfaces", kitti_ptr, Kind::kSurfaces, true);
+  register_associators("kitti_corners", kitti_ptr, Kind::kCorners, true);
+  register_associators("kitti_dense", kitti_dense_ptr, Kind::kSurfaces, true);
+  register_associators("street_surfaces", street_ptr, Kind::kSurfaces, true);
+  register_associators("street_corners", street_ptr, Kind::kCorners, true);
+  benchmark::RegisterBenchmark("NormalConsistencyPrepare/kitti_surfaces", BM_Prepare, kitti_ptr)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("LocalMapBuild/kitti_features", BM_LocalMapBuild, false)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("LocalMapBuild/kitti_dense", BM_LocalMapBuild, true)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Accumulate/PointToPlane", BM_Accumulate<semlio::PointToPlane>)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Accumulate/SemanticWeighted<PointToPlane>",
+                               BM_Accumulate<semlio::SemanticWeighted<semlio::PointToPlane>>)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("Accumulate/Robust<Huber,SemanticWeighted<PointToPlane>>",
+                               BM_Accumulate<semlio::Robust<semlio::Huber, semlio::SemanticWeighted<semlio::PointToPlane>>>)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

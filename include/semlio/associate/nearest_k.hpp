@@ -1,0 +1,83 @@
+#pragma once
+/// \file
+/// NearestK: the traditional LOAM / LIO-SAM association -- the k (default 5)
+/// nearest map points of each transformed feature, each within the distance
+/// gate (default 1.0 m). The baseline Algorithm 1 improves on.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include <semlio/associate/scan_shapes.hpp>
+#include <semlio/concepts.hpp>
+#include <semlio/lie/se3.hpp>
+#include <semlio/map/feature_map.hpp>
+
+namespace semlio {
+
+/// Settings of NearestK.
+struct NearestKConfig {
+  int k = 5;                    ///< neighbours per feature, 1..5
+  double max_distance_m = 1.0;  ///< distance gate on every neighbour (LIO-SAM: 1 m)
+};
+
+/// k nearest map points within the gate, in distance order, ranks 1..k; a
+/// feature with fewer than 2 (line) / 3 (plane) gated neighbours gets none.
+/// Holds non-owning pointers to the map and the scan features: both must
+/// outlive the use. associate() is const and thread-safe.
+class NearestK {
+ public:
+  using Config = NearestKConfig;
+
+  /// Validates the config (ConfigError).
+  explicit NearestK(const Config& config = {}) : config_(config) {
+    detail::check_association_setting("NearestKConfig.k", config_.k, 1, kMaxKeptMatches);
+    detail::check_association_setting("NearestKConfig.max_distance_m", config_.max_distance_m, 0.0, 1e6);
+  }
+
+  /// Binds the map to search (non-owning).
+  void set_map(const FeatureMap& map) { map_ = &map; }
+  /// Binds the frame's feature positions (scan frame, non-owning); nothing to precompute.
+  void set_scan(const std::vector<Eigen::Vector3f>& points_scan) { features_ = &points_scan; }
+
+  /// Matches of one query point already in the map frame.
+  [[nodiscard]] FeatureMatches match(const Eigen::Vector3f& q_map) const {
+    FeatureMatches m;
+    if (map_ == nullptr) return m;
+    std::array<std::uint32_t, kMaxKeptMatches> idx{};
+    std::array<float, kMaxKeptMatches> d2{};
+    const std::size_t n = map_->tree().knn(q_map, static_cast<std::size_t>(config_.k), idx.data(), d2.data());
+    const double gate2 = config_.max_distance_m * config_.max_distance_m;
+    for (std::size_t j = 0; j < n && detail::within_gate(d2[j], gate2); ++j) {
+      detail::push_match(m, idx[j], j + 1);
+    }
+    detail::enforce_min(map_->kind(), m);
+    return m;
+  }
+
+  /// One FeatureMatches per bound feature at pose T_map_scan into out
+  /// (resized; no allocation once its capacity suffices).
+  void associate(const SE3d& T_map_scan, Correspondences& out) const {
+    const std::size_t n = features_ == nullptr ? 0 : features_->size();
+    detail::reset_matches(n, out);
+    if (map_ == nullptr || map_->empty()) return;
+    const Eigen::Matrix3d R = T_map_scan.rotation();
+    const Eigen::Vector3d& t = T_map_scan.translation();
+    for (std::size_t i = 0; i < n; ++i) out[i] = match(detail::feature_to_map(R, t, (*features_)[i]));
+  }
+
+  /// The settings.
+  [[nodiscard]] const Config& config() const noexcept { return config_; }
+
+ private:
+  Config config_;
+  const FeatureMap* map_ = nullptr;
+  const std::vector<Eigen::Vector3f>* features_ = nullptr;
+};
+
+static_assert(Associator<NearestK, FeatureMap>);
+
+}  // namespace semlio

@@ -1,0 +1,236 @@
+#pragma once
+/// \file
+/// The local map of the scan-to-map front end (LIO-SAM's "surrounding
+/// keyframes"): the corner and surface features of the keyframes whose
+/// position lies within a radius of a query position, moved into the map
+/// frame, voxel-downsampled (each voxel: centroid, majority label), with a
+/// k-d tree and a cached normal / line direction per map point (eq. 3-6).
+///
+/// Cost model: build() is the expensive step (transform, voxelise, tree,
+/// one 10-NN fit per map point); the pipeline calls it when a keyframe is
+/// added (or the keyframe set near the vehicle changes), never per frame.
+/// Every per-frame query then reads the built maps only.
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <concepts>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <semlio/core/error.hpp>
+#include <semlio/core/labels.hpp>
+#include <semlio/lie/se3.hpp>
+#include <semlio/map/feature_map.hpp>
+
+namespace semlio {
+
+/// A labelled point cloud as LocalMap takes it: `points` [m] and `labels`
+/// (empty = unlabeled, else one per point). Scan and FeatureSet qualify.
+template <typename C>
+concept LabelledCloud = requires(const C& c) {
+  { c.points } -> std::convertible_to<const std::vector<Eigen::Vector3f>&>;
+  { c.labels } -> std::convertible_to<const std::vector<Class>&>;
+};
+
+/// Settings of LocalMap.
+struct LocalMapConfig {
+  double radius_m = 50.0;        ///< keyframes within this distance of the query position (LIO-SAM: 50 m)
+  double corner_leaf_m = 0.2;    ///< voxel leaf of the corner map (LIO-SAM mappingCornerLeafSize)
+  double surface_leaf_m = 0.4;   ///< voxel leaf of the surface map (LIO-SAM mappingSurfLeafSize)
+  int shape_neighbours = 10;     ///< map points per cached normal / direction fit (Algorithm 1: 10)
+  bool exclude_dynamic = false;  ///< keep movable classes (is_dynamic) out of the map
+  int candidate_list = 32;       ///< cached nearest map points per point, for exact fast k-NN (0 = off; FeatureMap)
+};
+
+namespace detail {
+
+/// Voxel-grid downsampling with labels: one output point per occupied voxel
+/// of edge `leaf_m`, at the centroid of its points, carrying the voxel's
+/// majority label (ties: the lowest class id). Output order is by voxel key,
+/// so the result does not depend on the input order. Non-finite points and
+/// points beyond +-2^20 leaves from the origin are dropped. labels may be
+/// empty (all unlabeled).
+inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points,
+                                const std::vector<Class>& labels, double leaf_m,
+                                std::vector<Eigen::Vector3f>& out_points,
+                                std::vector<Class>& out_labels) {
+  constexpr std::int64_t kHalf = std::int64_t{1} << 20;
+  const double inv_leaf = 1.0 / leaf_m;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+  keyed.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points[i];
+    if (!p.allFinite()) continue;
+    std::array<std::uint64_t, 3> c{};
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+      const double v = std::floor(static_cast<double>(p[a]) * inv_leaf);
+      if (!(v >= static_cast<double>(-kHalf) && v < static_cast<double>(kHalf))) {
+        inside = false;
+        break;
+      }
+      c[static_cast<std::size_t>(a)] = static_cast<std::uint64_t>(static_cast<std::int64_t>(v) + kHalf);
+    }
+    if (!inside) continue;
+    keyed.emplace_back((c[0] << 42U) | (c[1] << 21U) | c[2], static_cast<std::uint32_t>(i));
+  }
+  std::sort(keyed.begin(), keyed.end());
+  out_points.clear();
+  out_labels.clear();
+  std::size_t b = 0;
+  while (b < keyed.size()) {
+    std::size_t e = b;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    std::array<std::uint32_t, kNumClasses> votes{};
+    while (e < keyed.size() && keyed[e].first == keyed[b].first) {
+      const std::uint32_t i = keyed[e].second;
+      sum += points[i].cast<double>();
+      const Class c = labels.empty() ? Class::kUnlabeled : labels[i];
+      ++votes[static_cast<std::size_t>(index(c))];
+      ++e;
+    }
+    out_points.push_back((sum / static_cast<double>(e - b)).cast<float>());
+    const auto best = std::max_element(votes.begin(), votes.end());  // first maximum: lowest id
+    out_labels.push_back(class_from_index(static_cast<int>(best - votes.begin())));
+    b = e;
+  }
+}
+
+}  // namespace detail
+
+/// Corner and surface maps around a position, built from keyframe feature
+/// clouds at poses T_map_kf. Not thread-safe for mutation; const queries of
+/// the built maps may run concurrently.
+class LocalMap {
+ public:
+  using Config = LocalMapConfig;
+
+  /// Validates the config (ConfigError naming the field and value).
+  explicit LocalMap(const Config& config = {}) : config_(config) {
+    const auto positive = [](double v, const char* field) {
+      if (!(v > 0.0) || !std::isfinite(v)) {
+        throw ConfigError(std::string("LocalMapConfig.") + field + " = " + std::to_string(v) +
+                          ", expected a finite value > 0");
+      }
+    };
+    positive(config_.radius_m, "radius_m");
+    positive(config_.corner_leaf_m, "corner_leaf_m");
+    positive(config_.surface_leaf_m, "surface_leaf_m");
+    if (config_.shape_neighbours < 3 || config_.shape_neighbours > kMaxShapeNeighbours) {
+      throw ConfigError("LocalMapConfig.shape_neighbours = " + std::to_string(config_.shape_neighbours) +
+                        ", expected 3.." + std::to_string(kMaxShapeNeighbours));
+    }
+    if (config_.candidate_list < 0 || config_.candidate_list > kMaxCandidateList) {
+      throw ConfigError("LocalMapConfig.candidate_list = " + std::to_string(config_.candidate_list) +
+                        ", expected 0.." + std::to_string(kMaxCandidateList));
+    }
+  }
+
+  /// Stores a keyframe's corner and surface features (keyframe frame; labels
+  /// optional) at pose T_map_kf and returns its index. Does not rebuild.
+  /// Throws ValueError when labels are present with the wrong length.
+  template <LabelledCloud C1, LabelledCloud C2>
+  std::size_t add_keyframe(const SE3d& T_map_kf, const C1& corners, const C2& surfaces) {
+    keyframes_.push_back(Keyframe{T_map_kf, keep(corners.points, corners.labels, "corners"),
+                                  keep(surfaces.points, surfaces.labels, "surfaces")});
+    return keyframes_.size() - 1;
+  }
+
+  /// Corrects the pose of keyframe i (e.g. after a loop closure); call build() after.
+  void set_keyframe_pose(std::size_t i, const SE3d& T_map_kf) {
+    if (i >= keyframes_.size()) {
+      throw ValueError("LocalMap::set_keyframe_pose: keyframe " + std::to_string(i) + " of " +
+                       std::to_string(keyframes_.size()));
+    }
+    keyframes_[i].T_map_kf = T_map_kf;
+  }
+
+  /// Number of stored keyframes.
+  [[nodiscard]] std::size_t keyframe_count() const noexcept { return keyframes_.size(); }
+  /// Pose of keyframe i.
+  [[nodiscard]] const SE3d& keyframe_pose(std::size_t i) const { return keyframes_.at(i).T_map_kf; }
+
+  /// (Re)builds both maps from the keyframes within radius_m of center_map
+  /// [m, map frame]: transform, voxel-downsample, k-d tree, cached axes.
+  void build(const Eigen::Vector3d& center_map) {
+    active_.clear();
+    for (std::size_t i = 0; i < keyframes_.size(); ++i) {
+      if ((keyframes_[i].T_map_kf.translation() - center_map).norm() <= config_.radius_m) {
+        active_.push_back(i);
+      }
+    }
+    build_one(&Keyframe::corners, config_.corner_leaf_m, corners_);
+    build_one(&Keyframe::surfaces, config_.surface_leaf_m, surfaces_);
+  }
+
+  /// Indices of the keyframes used by the last build(), ascending.
+  [[nodiscard]] const std::vector<std::size_t>& active_keyframes() const noexcept { return active_; }
+  /// The corner (line) map of the last build().
+  [[nodiscard]] const FeatureMap& corners() const noexcept { return corners_; }
+  /// The surface (plane) map of the last build().
+  [[nodiscard]] const FeatureMap& surfaces() const noexcept { return surfaces_; }
+  /// The settings.
+  [[nodiscard]] const Config& config() const noexcept { return config_; }
+
+ private:
+  struct Cloud {
+    std::vector<Eigen::Vector3f> points;  // keyframe frame
+    std::vector<Class> labels;            // empty = unlabeled
+  };
+  struct Keyframe {
+    SE3d T_map_kf;
+    Cloud corners;
+    Cloud surfaces;
+  };
+
+  Cloud keep(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels,
+             const char* what) const {
+    if (!labels.empty() && labels.size() != points.size()) {
+      throw ValueError(std::string("LocalMap::add_keyframe: ") + what + " has " + std::to_string(points.size()) +
+                       " points but " + std::to_string(labels.size()) + " labels");
+    }
+    const bool labelled = !labels.empty();
+    Cloud c;
+    c.points.reserve(points.size());
+    if (labelled) c.labels.reserve(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (config_.exclude_dynamic && labelled && is_dynamic(labels[i])) continue;
+      c.points.push_back(points[i]);
+      if (labelled) c.labels.push_back(labels[i]);
+    }
+    return c;
+  }
+
+  void build_one(Cloud Keyframe::*member, double leaf_m, FeatureMap& map) const {
+    std::vector<Eigen::Vector3f> merged;
+    std::vector<Class> merged_labels;
+    for (const std::size_t k : active_) {
+      const Keyframe& kf = keyframes_[k];
+      const Cloud& cloud = kf.*member;
+      const Eigen::Matrix3d R = kf.T_map_kf.rotation();
+      const Eigen::Vector3d& t = kf.T_map_kf.translation();
+      for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+        merged.push_back((R * cloud.points[i].cast<double>() + t).cast<float>());
+        merged_labels.push_back(cloud.labels.empty() ? Class::kUnlabeled : cloud.labels[i]);
+      }
+    }
+    std::vector<Eigen::Vector3f> points;
+    std::vector<Class> labels;
+    detail::downsample_labelled(merged, merged_labels, leaf_m, points, labels);
+    map.build(std::move(points), std::move(labels), config_.shape_neighbours, config_.candidate_list);
+  }
+
+  Config config_;
+  std::vector<Keyframe> keyframes_;
+  std::vector<std::size_t> active_;
+  FeatureMap corners_{FeatureKind::kLine};
+  FeatureMap surfaces_{FeatureKind::kPlane};
+};
+
+}  // namespace semlio

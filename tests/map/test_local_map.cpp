@@ -1,0 +1,218 @@
+// Local map: keyframe selection by radius, transform into the map frame,
+// voxel downsampling with majority labels, movable classes kept out, cached
+// normals / line directions (eq. 3-6).
+#include <catch2/catch.hpp>
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <random>
+#include <cstddef>
+#include <vector>
+
+#include <semlio/core/error.hpp>
+#include <semlio/map/feature_map.hpp>
+#include <semlio/map/local_map.hpp>
+#include <semlio_test/associate_scenes.hpp>
+
+using semlio::Class;
+using semlio::LocalMap;
+using semlio::SE3d;
+using semlio_test::FeatureCloud;
+
+namespace {
+
+// A 5 m x 5 m plane z = 0 sampled every 0.25 m (one point per 0.4 m voxel or more).
+FeatureCloud plane_patch(Class label) {
+  FeatureCloud c;
+  for (int i = 0; i < 20; ++i) {
+    for (int j = 0; j < 20; ++j) {
+      c.points.emplace_back(0.25F * static_cast<float>(i) + 0.01F, 0.25F * static_cast<float>(j) + 0.01F, 0.0F);
+      c.labels.push_back(label);
+    }
+  }
+  return c;
+}
+
+// A vertical line x = y = 0.5, z in [0, 4), every 5 cm.
+FeatureCloud vertical_line(Class label) {
+  FeatureCloud c;
+  for (int k = 0; k < 80; ++k) {
+    c.points.emplace_back(0.5F, 0.5F, 0.05F * static_cast<float>(k) + 0.01F);
+    c.labels.push_back(label);
+  }
+  return c;
+}
+
+SE3d translation(double x, double y, double z) { return SE3d(semlio::SO3d(), Eigen::Vector3d(x, y, z)); }
+
+}  // namespace
+
+TEST_CASE("Voxel downsampling keeps centroids and majority labels", "[map]") {
+  // Leaf 1 m. Voxel (0,0,0): 3 points, 2 road + 1 car -> road, centroid by hand.
+  // Voxel (1,0,0): car, building, building, car -> tie 2:2 -> lowest id (car = 1).
+  const std::vector<Eigen::Vector3f> pts{{0.1F, 0.2F, 0.3F}, {0.5F, 0.5F, 0.5F}, {0.9F, 0.2F, 0.1F},
+                                         {1.1F, 0.1F, 0.1F}, {1.2F, 0.1F, 0.1F}, {1.3F, 0.1F, 0.1F},
+                                         {1.4F, 0.1F, 0.1F}, {-0.5F, 0.0F, 0.0F}};
+  const std::vector<Class> labels{Class::kRoad, Class::kCar, Class::kRoad, Class::kCar,
+                                  Class::kBuilding, Class::kBuilding, Class::kCar, Class::kVegetation};
+  std::vector<Eigen::Vector3f> out;
+  std::vector<Class> out_labels;
+  semlio::detail::downsample_labelled(pts, labels, 1.0, out, out_labels);
+  REQUIRE(out.size() == 3);
+  // Output is sorted by voxel key: x = -1 first, then x = 0, then x = 1.
+  CHECK(out[0].isApprox(Eigen::Vector3f(-0.5F, 0.0F, 0.0F)));
+  CHECK(out_labels[0] == Class::kVegetation);
+  CHECK(out[1].isApprox(Eigen::Vector3f(1.5F / 3.0F, 0.9F / 3.0F, 0.9F / 3.0F)));
+  CHECK(out_labels[1] == Class::kRoad);
+  CHECK(out[2].isApprox(Eigen::Vector3f(1.25F, 0.1F, 0.1F)));
+  CHECK(out_labels[2] == Class::kCar);
+}
+
+TEST_CASE("LocalMap selects keyframes by radius and moves them into the map frame", "[map]") {
+  LocalMap map({.radius_m = 50.0, .corner_leaf_m = 0.2, .surface_leaf_m = 0.4});
+  const FeatureCloud plane = plane_patch(Class::kRoad);
+  const FeatureCloud line = vertical_line(Class::kPole);
+  map.add_keyframe(translation(0, 0, 0), line, plane);
+  map.add_keyframe(translation(30, 0, 0), line, plane);
+  map.add_keyframe(translation(80, 0, 0), line, plane);
+  REQUIRE(map.keyframe_count() == 3);
+  CHECK(map.surfaces().empty());  // nothing before build()
+
+  map.build(Eigen::Vector3d::Zero());
+  CHECK(map.active_keyframes() == std::vector<std::size_t>{0, 1});
+  // Every map point lies in one of the two moved patches (z = 0, x in [0,5) or [30,35)).
+  for (const auto& p : map.surfaces().points()) {
+    CHECK(std::abs(p.z()) < 1e-6F);
+    const bool first = p.x() >= 0.0F && p.x() < 5.0F;
+    const bool second = p.x() >= 30.0F && p.x() < 35.0F;
+    CHECK((first || second));
+  }
+  // x, y in [0.01, 4.76] every 0.25 m into 0.4 m voxels: 12 x 12 voxels, each
+  // non-empty (spacing < leaf), per keyframe.
+  CHECK(map.surfaces().size() == 2 * 12 * 12);
+  // Line: 5 cm steps into 0.2 m voxels: 4 m / 0.2 = 20 voxels per keyframe.
+  CHECK(map.corners().size() == 2 * 20);
+  for (const Class c : map.surfaces().labels()) CHECK(c == Class::kRoad);
+
+  map.build(Eigen::Vector3d(80, 0, 0));  // 50 m radius: the 30 m and the 80 m keyframes
+  CHECK(map.active_keyframes() == std::vector<std::size_t>{1, 2});
+
+  // A corrected pose moves the points (loop closure).
+  map.set_keyframe_pose(1, translation(30, 0, 2));
+  map.build(Eigen::Vector3d(30, 0, 0));
+  bool lifted = false;
+  for (const auto& p : map.surfaces().points()) lifted = lifted || std::abs(p.z() - 2.0F) < 1e-5F;
+  CHECK(lifted);
+  CHECK_THROWS_AS(map.set_keyframe_pose(7, SE3d()), semlio::ValueError);
+}
+
+TEST_CASE("LocalMap caches normals of surfaces and directions of corners", "[map]") {
+  LocalMap map;
+  // A rotated keyframe: the plane's normal and the line's direction rotate too.
+  Eigen::Matrix<double, 6, 1> xi;
+  xi << 1.0, 2.0, 0.5, 0.3, -0.2, 0.7;
+  const SE3d T = SE3d::exp(xi);
+  map.add_keyframe(T, vertical_line(Class::kPole), plane_patch(Class::kRoad));
+  map.build(T.translation());
+  const Eigen::Vector3f normal = (T.rotation() * Eigen::Vector3d::UnitZ()).cast<float>();
+  REQUIRE(map.surfaces().axes().size() == map.surfaces().size());
+  for (const auto& n : map.surfaces().axes()) CHECK(std::abs(n.dot(normal)) > 0.9999F);
+  for (const auto& d : map.corners().axes()) CHECK(std::abs(d.dot(normal)) > 0.9999F);
+  CHECK(map.surfaces().kind() == semlio::FeatureKind::kPlane);
+  CHECK(map.corners().kind() == semlio::FeatureKind::kLine);
+  CHECK(map.surfaces().shape_neighbours() == 10);
+}
+
+TEST_CASE("LocalMap can keep movable classes out", "[map]") {
+  FeatureCloud mixed = plane_patch(Class::kRoad);
+  for (std::size_t i = 0; i < mixed.labels.size(); i += 2) mixed.labels[i] = Class::kCar;
+  LocalMap keep_all;
+  LocalMap static_only({.exclude_dynamic = true});
+  keep_all.add_keyframe(SE3d(), FeatureCloud{}, mixed);
+  static_only.add_keyframe(SE3d(), FeatureCloud{}, mixed);
+  keep_all.build(Eigen::Vector3d::Zero());
+  static_only.build(Eigen::Vector3d::Zero());
+  bool any_car = false;
+  for (const Class c : keep_all.surfaces().labels()) any_car = any_car || c == Class::kCar;
+  CHECK(any_car);
+  for (const Class c : static_only.surfaces().labels()) CHECK_FALSE(semlio::is_dynamic(c));
+  CHECK(static_only.surfaces().size() > 0);
+}
+
+TEST_CASE("LocalMap builds the real KITTI scan deterministically", "[map]") {
+  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.1);
+  LocalMap a;
+  LocalMap b;
+  a.add_keyframe(SE3d(), cloud, cloud);
+  b.add_keyframe(SE3d(), cloud, cloud);
+  a.build(Eigen::Vector3d::Zero());
+  b.build(Eigen::Vector3d::Zero());
+  REQUIRE(a.surfaces().size() > 10000);
+  CHECK(a.corners().size() > a.surfaces().size());  // smaller leaf, more points
+  CHECK(a.surfaces().points() == b.surfaces().points());
+  CHECK(a.surfaces().axes() == b.surfaces().axes());
+  // No two surface map points share a 0.4 m voxel.
+  std::vector<Eigen::Vector3f> again;
+  std::vector<Class> labels;
+  semlio::detail::downsample_labelled(a.surfaces().points(), {}, 0.4, again, labels);
+  CHECK(again.size() == a.surfaces().size());
+  // Every cached normal is usable (unit length): 10 neighbours always exist.
+  std::size_t unit = 0;
+  for (const auto& n : a.surfaces().axes()) unit += std::abs(n.norm() - 1.0F) < 1e-4F ? 1U : 0U;
+  CHECK(unit == a.surfaces().size());
+}
+
+TEST_CASE("FeatureMap::nearest equals a k-d tree k-NN cut at the gate", "[map]") {
+  // Exactness of the candidate-list shortcut: random queries around the real
+  // scan (on, near and away from the map), every k, several gates, lists of
+  // several lengths (0 = k-d tree only).
+  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.4);
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<std::size_t> pick(0, cloud.points.size() - 1);
+  std::normal_distribution<float> jitter(0.0F, 0.5F);
+  std::vector<Eigen::Vector3f> queries;
+  for (int i = 0; i < 3000; ++i) {
+    const float scale = i % 3 == 0 ? 0.1F : (i % 3 == 1 ? 1.0F : 4.0F);
+    queries.push_back(cloud.points[pick(rng)] + scale * Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng)));
+  }
+  for (const int list : {0, 12, 32}) {
+    semlio::FeatureMap map(semlio::FeatureKind::kPlane);
+    map.build(cloud.points, {}, 10, list);
+    CHECK(map.candidate_list() == static_cast<std::size_t>(list == 0 ? 0 : std::max(list, 10)));
+    for (const double gate : {0.3, 1.0, std::numeric_limits<double>::infinity()}) {
+      for (const std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{15}, std::size_t{40}}) {
+        std::size_t mismatches = 0;
+        for (const auto& q : queries) {
+          std::array<std::uint32_t, 64> ia{};
+          std::array<float, 64> da{};
+          std::array<std::uint32_t, 64> ib{};
+          std::array<float, 64> db{};
+          const std::size_t na = map.nearest(q, k, gate * gate, ia.data(), da.data());
+          std::size_t nb = map.tree().knn(q, k, ib.data(), db.data());
+          while (nb > 0 && !(static_cast<double>(db[nb - 1]) <= gate * gate)) --nb;
+          bool same = na == nb;
+          for (std::size_t j = 0; same && j < na; ++j) same = ia[j] == ib[j] && da[j] == db[j];
+          mismatches += same ? 0U : 1U;
+        }
+        INFO("list " << list << " gate " << gate << " k " << k);
+        CHECK(mismatches == 0);
+      }
+    }
+  }
+}
+
+TEST_CASE("LocalMap rejects bad settings and inputs", "[map]") {
+  CHECK_THROWS_AS(LocalMap({.candidate_list = 65}), semlio::ConfigError);
+  CHECK_THROWS_AS(LocalMap({.radius_m = 0.0}), semlio::ConfigError);
+  CHECK_THROWS_AS(LocalMap({.surface_leaf_m = -1.0}), semlio::ConfigError);
+  CHECK_THROWS_AS(LocalMap({.shape_neighbours = 2}), semlio::ConfigError);
+  LocalMap map;
+  FeatureCloud bad = plane_patch(Class::kRoad);
+  bad.labels.pop_back();
+  CHECK_THROWS_AS(map.add_keyframe(SE3d(), FeatureCloud{}, bad), semlio::ValueError);
+}
