@@ -1,1 +1,3 @@
-set(SEMLIO_TESTS_imu_imu)
+set(SEMLIO_TESTS_imu_imu
+  imu/test_preintegration.cpp
+  imu/test_deskew.cpp)
