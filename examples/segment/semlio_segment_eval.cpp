@@ -1,0 +1,208 @@
+// semlio_segment_eval: scores GeometricSegmenter against the simulator's
+// exact labels.
+//
+//   semlio_segment_eval [--world urban|rural|highway|aliased] [--frames N]
+//                       [--seed S] [--stride K] [--traffic none|light|heavy]
+//                       [--merged-ground] [--markdown]
+//   semlio_segment_eval --kitti-bin FILE.bin [--repeat N]
+//
+// Simulates a drive of N * K frames (in memory, nothing is written), segments
+// every K-th frame (default K = 10, so the N frames spread over the drive) and
+// prints the per-class IoU and the mIoU (SemanticKITTI rules, see
+// eval/miou.hpp), plus three grouped IoUs: ground (road, parking, sidewalk,
+// other-ground, terrain as one class), pole/trunk (pole and trunk as one
+// class) and the segmenter's time per frame. --merged-ground labels all
+// ground kRoad (GeometricSegmenterConfig::split_ground = false).
+// --kitti-bin segments one real KITTI scan N times (default 200) and prints
+// the time per scan (median, 10th/90th percentile) and the label shares.
+// --markdown prints one table row:
+//   | world | mIoU | ground IoU | building IoU | vegetation IoU | pole/trunk IoU | car IoU |
+//
+// Exit codes: 0 success; 1 error; 2 bad command line.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <exception>
+#include <initializer_list>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <semlio/core/labels.hpp>
+#include <semlio/eval/miou.hpp>
+#include <semlio/io/kitti.hpp>
+#include <semlio/segment/geometric_segmenter.hpp>
+#include <semlio/sim/simulator.hpp>
+
+namespace {
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: semlio_segment_eval [--world urban|rural|highway|aliased] [--frames N] [--seed S]\n"
+               "                           [--stride K] [--traffic none|light|heavy] [--merged-ground] [--markdown]\n"
+               "       semlio_segment_eval --kitti-bin FILE.bin [--repeat N]\n");
+  return 2;
+}
+
+// IoU of a group of classes taken as one class.
+double group_iou(const semlio::eval::ConfusionMatrix& m, std::initializer_list<semlio::Class> group) {
+  const auto in = [&](int k) {
+    return std::find(group.begin(), group.end(), semlio::class_from_index(k)) != group.end();
+  };
+  std::uint64_t tp = 0, fp = 0, fn = 0;
+  for (int t = 1; t < semlio::kNumClasses; ++t) {
+    for (int p = 0; p < semlio::kNumClasses; ++p) {
+      const std::uint64_t n = m.count(semlio::class_from_index(t), semlio::class_from_index(p));
+      if (in(t) && in(p)) tp += n;
+      if (in(t) && !in(p)) fn += n;
+      if (!in(t) && in(p)) fp += n;
+    }
+  }
+  const std::uint64_t d = tp + fp + fn;
+  return d == 0 ? 0.0 : static_cast<double>(tp) / static_cast<double>(d);
+}
+
+// Times the segmenter on one real scan; prints the label shares.
+int time_kitti(const std::string& path, std::size_t repeat) {
+  const semlio::Scan original = semlio::io::read_kitti_bin(path);
+  const semlio::GeometricSegmenter seg;
+  semlio::Scan scan = original;
+  std::vector<double> ms;
+  for (std::size_t k = 0; k < repeat + 3; ++k) {
+    scan.labels.clear();
+    const auto t0 = std::chrono::steady_clock::now();
+    seg.segment(scan);
+    const auto t1 = std::chrono::steady_clock::now();
+    if (k >= 3) ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());  // 3 warm-up runs
+  }
+  std::sort(ms.begin(), ms.end());
+  std::printf("%s: %zu points, segment time median %.2f ms (p10 %.2f, p90 %.2f) over %zu runs\n", path.c_str(),
+              scan.size(), ms[ms.size() / 2], ms[ms.size() / 10], ms[ms.size() * 9 / 10], ms.size());
+  const semlio::LabelHistogram h = semlio::label_histogram(scan);
+  for (int k = 0; k < semlio::kNumClasses; ++k) {
+    const auto n = h[static_cast<std::size_t>(k)];
+    if (n == 0) continue;
+    std::printf("  %-12s %6.1f %%\n", std::string(semlio::class_name(semlio::class_from_index(k))).c_str(),
+                100.0 * static_cast<double>(n) / static_cast<double>(scan.size()));
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  semlio::sim::SimulatorConfig sc;
+  sc.traffic = semlio::sim::TrafficLevel::kLight;
+  std::size_t frames = 20;
+  std::size_t stride = 10;
+  bool markdown = false;
+  bool merged = false;
+  std::string kitti_bin;
+  std::size_t repeat = 200;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string_view a = argv[i];
+      const auto value = [&]() -> std::string {
+        if (i + 1 >= argc) throw semlio::ConfigError(std::string(a) + " needs a value");
+        return argv[++i];
+      };
+      if (a == "--world") {
+        sc.world = semlio::sim::parse_world(value());
+      } else if (a == "--frames") {
+        frames = std::stoul(value());
+      } else if (a == "--seed") {
+        sc.seed = std::stoull(value());
+      } else if (a == "--stride") {
+        stride = std::max<std::size_t>(1, std::stoul(value()));
+      } else if (a == "--traffic") {
+        const std::string t = value();
+        if (t == "none") {
+          sc.traffic = semlio::sim::TrafficLevel::kNone;
+        } else if (t == "light") {
+          sc.traffic = semlio::sim::TrafficLevel::kLight;
+        } else if (t == "heavy") {
+          sc.traffic = semlio::sim::TrafficLevel::kHeavy;
+        } else {
+          throw semlio::ConfigError("--traffic must be none|light|heavy, got '" + t + "'");
+        }
+      } else if (a == "--markdown") {
+        markdown = true;
+      } else if (a == "--kitti-bin") {
+        kitti_bin = value();
+      } else if (a == "--repeat") {
+        repeat = std::max<std::size_t>(1, std::stoul(value()));
+      } else if (a == "--merged-ground") {
+        merged = true;
+      } else {
+        return usage();
+      }
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "semlio_segment_eval: %s\n", e.what());
+    return usage();
+  }
+  if (frames == 0) return usage();
+  try {
+    if (!kitti_bin.empty()) return time_kitti(kitti_bin, repeat);
+    sc.frames = frames * stride;
+    const semlio::sim::Simulator sim(sc);
+    semlio::GeometricSegmenterConfig gc;
+    gc.split_ground = !merged;
+    const semlio::GeometricSegmenter seg(gc);
+    semlio::eval::ConfusionMatrix cm;
+    std::vector<double> ms;
+    semlio::Scan scan;
+    for (std::size_t f = 0; f < frames; ++f) {
+      semlio::sim::Frame fr = sim.frame(f * stride);
+      const std::vector<semlio::Class> truth = fr.scan.labels;
+      scan = std::move(fr.scan);
+      const auto t0 = std::chrono::steady_clock::now();
+      seg.segment(scan);
+      const auto t1 = std::chrono::steady_clock::now();
+      ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+      cm.add(truth, scan.labels);
+    }
+    std::sort(ms.begin(), ms.end());
+    const semlio::eval::MiouReport r = cm.report();
+    using semlio::Class;
+    const double ground = group_iou(cm, {Class::kRoad, Class::kParking, Class::kSidewalk, Class::kOtherGround,
+                                         Class::kTerrain});
+    const double stem = group_iou(cm, {Class::kPole, Class::kTrunk});
+    const auto iou = [&](Class c) { return r.iou[static_cast<std::size_t>(semlio::index(c))]; };
+    const std::string world(semlio::sim::world_name(sc.world));
+    if (markdown) {
+      std::printf("| %s | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", world.c_str(), r.miou, ground,
+                  iou(Class::kBuilding), iou(Class::kVegetation), stem, iou(Class::kCar));
+      return 0;
+    }
+    std::printf("world %s, seed %llu, %zu frames (every %zu-th), %llu labelled points\n", world.c_str(),
+                static_cast<unsigned long long>(sc.seed), frames, stride, static_cast<unsigned long long>(r.points));
+    std::printf("%-14s %8s %12s\n", "class", "IoU", "true points");
+    for (int k = 1; k < semlio::kNumClasses; ++k) {
+      if (!r.counted[static_cast<std::size_t>(k)]) continue;
+      const Class c = semlio::class_from_index(k);
+      std::uint64_t truth_n = 0;
+      for (int p = 0; p < semlio::kNumClasses; ++p) truth_n += cm.count(c, semlio::class_from_index(p));
+      std::printf("%-14s %8.3f %12llu  ->", std::string(semlio::class_name(c)).c_str(), r.iou[static_cast<std::size_t>(k)],
+                  static_cast<unsigned long long>(truth_n));
+      // Where the points of this class went (shares of at least 2 %).
+      for (int p = 0; p < semlio::kNumClasses; ++p) {
+        const std::uint64_t n = cm.count(c, semlio::class_from_index(p));
+        if (truth_n > 0 && 50 * n >= truth_n) {
+          std::printf(" %s %.0f%%", std::string(semlio::class_name(semlio::class_from_index(p))).c_str(),
+                      100.0 * static_cast<double>(n) / static_cast<double>(truth_n));
+        }
+      }
+      std::printf("\n");
+    }
+    std::printf("mIoU %.3f over %d classes, accuracy %.3f\n", r.miou, r.classes, r.accuracy);
+    std::printf("ground (merged) IoU %.3f, pole/trunk (merged) IoU %.3f\n", ground, stem);
+    std::printf("segmenter time per frame: median %.2f ms, max %.2f ms\n", ms[ms.size() / 2], ms.back());
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "semlio_segment_eval: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,250 @@
+#pragma once
+/// \file
+/// Ground segmentation on a polar grid (sectors of azimuth x range bins), in
+/// the spirit of Himmelsbach et al., "Fast segmentation of 3D point clouds for
+/// ground vehicles" (2010): each sector is walked outwards from the sensor and
+/// a bin's lowest point becomes the local ground height when the bin is flat
+/// and its height is reachable from the previous ground bin within a slope
+/// limit. Along the walk the ground is also split into road (the surface the
+/// vehicle stands on), a raised surface behind a curb (sidewalk) and a lower
+/// or rougher surface past a step down (terrain, e.g. a verge).
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include <semlio/segment/detail/fast_atan2.hpp>
+
+namespace semlio::detail {
+
+/// Parameters of PolarGround (see GeometricSegmenterConfig for their meaning).
+struct PolarGroundParams {
+  float sensor_height_m = 1.73F;
+  float max_range_m = 120.0F;
+  int sectors = 360;
+  float bins_per_sqrt_m = 8.0F;
+  float ground_tolerance_m = 0.2F;
+  float step_m = 0.1F;
+  float max_slope = 0.15F;
+  float flat_tolerance_m = 0.12F;
+  float min_flat_fraction = 0.5F;
+  float curb_min_m = 0.08F;
+  float road_bend_per_m = 0.01F;
+  float sidewalk_width_m = 5.0F;
+};
+
+/// What the ground walk says about a point.
+/// kNearGround: within the ground tolerance of a bin that did not pass as
+/// ground (the foot of a wall, a car's underside, a curb face).
+enum class GroundKind : std::uint8_t { kObstacle = 0, kRoad = 1, kSidewalk = 2, kTerrain = 3, kInvalid = 4, kNearGround = 5 };
+
+/// Polar-grid ground segmentation with reusable buffers (no allocation once
+/// the buffers have grown to the largest scan seen). Not thread-safe.
+class PolarGround {
+ public:
+  /// Ground state (road/sidewalk/terrain) of the bin of point i after run().
+  [[nodiscard]] GroundKind bin_state(std::size_t i) const {
+    return bin_of_[i] < 0 ? GroundKind::kInvalid : state_[static_cast<std::size_t>(bin_of_[i])];
+  }
+
+  /// Classifies every point as ground (road/sidewalk/terrain) or obstacle and
+  /// writes its height above the local ground [m]. Non-finite points get
+  /// kInvalid and height 0.
+  void run(const std::vector<Eigen::Vector3f>& points, const PolarGroundParams& p, std::vector<float>& height_m,
+           std::vector<GroundKind>& kind) {
+    const std::size_t n = points.size();
+    height_m.resize(n);
+    kind.resize(n);
+    const int sectors = std::max(1, p.sectors);
+    const int bins = std::max(1, static_cast<int>(std::ceil(std::sqrt(std::max(p.max_range_m, 1.0F)) * p.bins_per_sqrt_m)) + 1);
+    const std::size_t cells = static_cast<std::size_t>(sectors) * static_cast<std::size_t>(bins);
+    zmin_.assign(cells, std::numeric_limits<float>::infinity());
+    count_.assign(cells, 0U);
+    flat_count_.assign(cells, 0U);
+    ground_z_.resize(cells);
+    state_.resize(cells);
+    flat_.resize(cells);
+    bin_of_.resize(n);
+    const float sector_scale = static_cast<float>(sectors) / (2.0F * std::numbers::pi_v<float>);
+    // Pass 1: bin every point, lowest height per bin.
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3f& q = points[i];
+      if (!q.allFinite()) {
+        bin_of_[i] = -1;
+        continue;
+      }
+      const float r = std::sqrt(q.x() * q.x() + q.y() * q.y());
+      int b = static_cast<int>(std::sqrt(r) * p.bins_per_sqrt_m);
+      b = std::min(b, bins - 1);
+      int s = static_cast<int>((fast_atan2(q.y(), q.x()) + std::numbers::pi_v<float>) * sector_scale);
+      s = std::clamp(s, 0, sectors - 1);
+      const int cell = s * bins + b;
+      bin_of_[i] = cell;
+      const auto c = static_cast<std::size_t>(cell);
+      zmin_[c] = std::min(zmin_[c], q.z());
+      if (count_[c] < 0xFFFFU) ++count_[c];
+    }
+    // Pass 2: how many points of a bin lie near its lowest point (flatness).
+    for (std::size_t i = 0; i < n; ++i) {
+      if (bin_of_[i] < 0) continue;
+      const auto c = static_cast<std::size_t>(bin_of_[i]);
+      if (points[i].z() <= zmin_[c] + p.flat_tolerance_m && flat_count_[c] < 0xFFFFU) ++flat_count_[c];
+    }
+    // The local ground plane around the vehicle anchors every sector's road line.
+    fit_local_plane(sectors, bins, p);
+    // Walk each sector outwards.
+    for (int s = 0; s < sectors; ++s) walk_sector(s, bins, p);
+    // Label points.
+    for (std::size_t i = 0; i < n; ++i) {
+      if (bin_of_[i] < 0) {
+        height_m[i] = 0.0F;
+        kind[i] = GroundKind::kInvalid;
+        continue;
+      }
+      const auto c = static_cast<std::size_t>(bin_of_[i]);
+      const float h = points[i].z() - ground_z_[c];
+      height_m[i] = h;
+      // Bins that did not pass as ground (walls, cars, poles standing in
+      // them) keep as ground only points very close to the ground height.
+      if (h > p.ground_tolerance_m) {
+        kind[i] = GroundKind::kObstacle;
+      } else if (flat_[c] == 0U && h > p.curb_min_m) {
+        kind[i] = GroundKind::kNearGround;
+      } else if (state_[c] == GroundKind::kRoad && h > p.curb_min_m) {
+        kind[i] = GroundKind::kSidewalk;  // the raised side of a bin that straddles a curb
+      } else {
+        kind[i] = state_[c];
+      }
+    }
+  }
+
+ private:
+  // Fits z = c0 + cx x + cy y to the lowest points of the flat bins 3-12 m
+  // away (least squares, then again without bins more than 0.15 m off): the
+  // road under and around the vehicle, including the sensor's roll and pitch
+  // relative to it. Falls back to z = -sensor_height with too few bins.
+  void fit_local_plane(int sectors, int bins, const PolarGroundParams& p) {
+    sectors_ = sectors;
+    plane_ = Eigen::Vector3f(-p.sensor_height_m, 0.0F, 0.0F);
+    const float inv = 1.0F / p.bins_per_sqrt_m;
+    const int b0 = static_cast<int>(std::sqrt(3.0F) * p.bins_per_sqrt_m);
+    const int b1 = std::min(bins - 1, static_cast<int>(std::sqrt(12.0F) * p.bins_per_sqrt_m));
+    for (int pass = 0; pass < 2; ++pass) {
+      Eigen::Matrix3f A = Eigen::Matrix3f::Zero();
+      Eigen::Vector3f rhs = Eigen::Vector3f::Zero();
+      int used = 0;
+      for (int s = 0; s < sectors; ++s) {
+        const float az = (static_cast<float>(s) + 0.5F) * 2.0F * std::numbers::pi_v<float> / static_cast<float>(sectors) -
+                         std::numbers::pi_v<float>;
+        const float cs = std::cos(az);
+        const float sn = std::sin(az);
+        for (int b = b0; b <= b1; ++b) {
+          const auto c = static_cast<std::size_t>(s * bins + b);
+          if (count_[c] == 0 || static_cast<float>(flat_count_[c]) < p.min_flat_fraction * static_cast<float>(count_[c])) {
+            continue;
+          }
+          const float rc = (static_cast<float>(b) + 0.5F) * inv;
+          const float r = rc * rc;
+          const Eigen::Vector3f a(1.0F, r * cs, r * sn);
+          const float z = zmin_[c];
+          if (std::fabs(z - plane_.dot(a)) > (pass == 0 ? 0.5F : 0.15F)) continue;
+          A += a * a.transpose();
+          rhs += a * z;
+          ++used;
+        }
+      }
+      if (used < 20) return;
+      A += 1.0F * Eigen::Matrix3f::Identity() * 1e-3F;  // keeps a one-sided fit well posed
+      const Eigen::Vector3f sol = A.ldlt().solve(rhs);
+      if (!sol.allFinite()) return;
+      plane_ = sol;
+    }
+  }
+
+  // Road model of a sector: a line z = a + slope * r fitted (least squares,
+  // slope weakly pulled to 0) to the foot of the sensor and the bins accepted
+  // as road so far (the vehicle stands on the road). A ground bin off this line
+  // by more than curb_min_m (+ road_bend_per_m per metre beyond the last road
+  // bin, for vertical curves) ends the road: above it is a sidewalk behind a
+  // curb, below it a verge. Comparing with the line rather than with the
+  // previous bin also catches edges crossed at a shallow angle, where the
+  // height changes slowly from bin to bin.
+  void walk_sector(int s, int bins, const PolarGroundParams& p) {
+    float prev_z = -p.sensor_height_m;
+    float prev_r = 0.0F;
+    // Road-line fit sums, starting from two virtual points of the local
+    // ground plane along this sector (at the sensor's foot and 5 m out).
+    const float az = (static_cast<float>(s) + 0.5F) * 2.0F * std::numbers::pi_v<float> / static_cast<float>(sectors_) -
+                     std::numbers::pi_v<float>;
+    const float grade = plane_.y() * std::cos(az) + plane_.z() * std::sin(az);
+    const float z0 = plane_.x();
+    const float z5 = plane_.x() + 5.0F * grade;
+    float n = 2.0F, sr = 5.0F, sz = z0 + z5, srr = 25.0F, srz = 5.0F * z5;
+    float road_r = 0.0F;
+    float step_r = 0.0F;
+    GroundKind state = GroundKind::kRoad;
+    const float inv = 1.0F / p.bins_per_sqrt_m;
+    for (int b = 0; b < bins; ++b) {
+      const auto c = static_cast<std::size_t>(s * bins + b);
+      const float rc = (static_cast<float>(b) + 0.5F) * inv;
+      const float r = rc * rc;  // bin centre range [m]
+      bool accepted = false;
+      if (count_[c] > 0) {
+        const float z = zmin_[c];
+        const bool flat = static_cast<float>(flat_count_[c]) >= p.min_flat_fraction * static_cast<float>(count_[c]);
+        accepted = flat && std::fabs(z - prev_z) <= p.step_m + p.max_slope * (r - prev_r);
+        if (accepted) {
+          if (state == GroundKind::kRoad) {
+            bool on_road = true;
+            {
+              constexpr float kSlopePrior = 1.0F;  // [m^2]: keeps the slope near 0 until bins spread in range
+              const float mr = sr / n;
+              const float mz = sz / n;
+              const float slope = (srz - n * mr * mz) / (srr - n * mr * mr + kSlopePrior);
+              const float dzr = z - (mz + slope * (r - mr));
+              on_road = std::fabs(dzr) <= p.curb_min_m + p.road_bend_per_m * (r - road_r);
+              if (!on_road) {
+                state = dzr > 0.0F ? GroundKind::kSidewalk : GroundKind::kTerrain;
+                step_r = r;
+              }
+            }
+            if (on_road) {
+              n += 1.0F;
+              sr += r;
+              sz += z;
+              srr += r * r;
+              srz += r * z;
+              road_r = r;
+            }
+          } else if (state == GroundKind::kSidewalk && r - step_r > p.sidewalk_width_m) {
+            state = GroundKind::kTerrain;
+          }
+          prev_z = z;
+          prev_r = r;
+        }
+      }
+      ground_z_[c] = prev_z;
+      state_[c] = state;
+      flat_[c] = accepted ? 1U : 0U;
+    }
+  }
+
+  Eigen::Vector3f plane_ = Eigen::Vector3f::Zero();  // local ground plane (c0, cx, cy)
+  int sectors_ = 1;
+  std::vector<float> zmin_;
+  std::vector<std::uint16_t> count_;
+  std::vector<std::uint16_t> flat_count_;
+  std::vector<float> ground_z_;
+  std::vector<GroundKind> state_;
+  std::vector<std::uint8_t> flat_;  // 1: the bin passed as ground (flat, reachable)
+  std::vector<std::int32_t> bin_of_;
+};
+
+}  // namespace semlio::detail

@@ -1,0 +1,1 @@
+set(SEMLIO_TESTS_segment_segment segment/test_geometric_segmenter.cpp)

@@ -1,0 +1,252 @@
+#include <catch2/catch.hpp>
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <initializer_list>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <semlio/core/labels.hpp>
+#include <semlio/core/scan.hpp>
+#include <semlio/eval/miou.hpp>
+#include <semlio/io/kitti.hpp>
+#include <semlio/segment/detail/fast_atan2.hpp>
+#include <semlio/segment/geometric_segmenter.hpp>
+#include <semlio/sim/simulator.hpp>
+#include <semlio_test/data.hpp>
+#include <semlio_test/segment_scene.hpp>
+
+using semlio::Class;
+
+namespace {
+
+bool is_ground(Class c) {
+  return c == Class::kRoad || c == Class::kParking || c == Class::kSidewalk || c == Class::kOtherGround ||
+         c == Class::kTerrain;
+}
+
+// IoU of a group of classes taken as one (truth and prediction both mapped).
+double group_iou(const std::vector<Class>& truth, const std::vector<Class>& pred, std::initializer_list<Class> group) {
+  const auto in = [&](Class c) {
+    for (const Class g : group) {
+      if (g == c) return true;
+    }
+    return false;
+  };
+  std::size_t tp = 0, fp = 0, fn = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    if (truth[i] == Class::kUnlabeled) continue;
+    const bool t = in(truth[i]);
+    const bool p = in(pred[i]);
+    tp += (t && p) ? 1U : 0U;
+    fn += (t && !p) ? 1U : 0U;
+    fp += (!t && p) ? 1U : 0U;
+  }
+  const std::size_t d = tp + fp + fn;
+  return d == 0 ? 0.0 : static_cast<double>(tp) / static_cast<double>(d);
+}
+
+// Classes a SemanticKITTI label is compatible with for the 50-point sanity check.
+bool compatible(Class truth, Class pred) {
+  if (is_ground(truth)) return is_ground(pred);
+  if (truth == Class::kTrunk || truth == Class::kPole) return pred == Class::kTrunk || pred == Class::kPole;
+  return truth == pred;
+}
+
+}  // namespace
+
+TEST_CASE("fast_atan2 matches std::atan2", "[segment]") {
+  double worst = 0.0;
+  for (int i = 0; i < 3600; ++i) {
+    const double a = -3.14159 + 6.28318 * i / 3600.0;
+    for (const double r : {0.01, 1.0, 100.0}) {
+      const auto x = static_cast<float>(r * std::cos(a));
+      const auto y = static_cast<float>(r * std::sin(a));
+      const double err = std::abs(static_cast<double>(semlio::detail::fast_atan2(y, x)) - std::atan2(static_cast<double>(y), static_cast<double>(x)));
+      worst = std::max(worst, std::min(err, 2.0 * 3.14159265358979 - err));
+    }
+  }
+  CHECK(worst < 2.5e-4);  // far below the 1 deg (0.017 rad) sectors
+  CHECK(semlio::detail::fast_atan2(0.0F, 0.0F) == 0.0F);
+}
+
+TEST_CASE("GeometricSegmenter labels a synthetic street scene", "[segment]") {
+  semlio::Scan scan = semlio_test::segment_scene();
+  const std::vector<Class> truth = scan.labels;
+  REQUIRE(scan.size() > 30000);
+  const semlio::GeometricSegmenter seg;
+  seg.segment(scan);
+  REQUIRE(scan.labels.size() == scan.points.size());
+  // Documented lower bounds for this scene (README: segmenter quality).
+  CHECK(group_iou(truth, scan.labels, {Class::kRoad, Class::kSidewalk, Class::kTerrain}) > 0.95);
+  CHECK(group_iou(truth, scan.labels, {Class::kBuilding}) > 0.85);
+  CHECK(group_iou(truth, scan.labels, {Class::kCar}) > 0.8);
+  CHECK(group_iou(truth, scan.labels, {Class::kVegetation}) > 0.6);
+  CHECK(group_iou(truth, scan.labels, {Class::kPole, Class::kTrunk}) > 0.5);
+  // The flat road with no curb is road, not sidewalk or terrain.
+  std::size_t road = 0, ground = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    if (truth[i] != Class::kRoad) continue;
+    ++ground;
+    road += scan.labels[i] == Class::kRoad ? 1U : 0U;
+  }
+  CHECK(static_cast<double>(road) > 0.95 * static_cast<double>(ground));
+}
+
+TEST_CASE("GeometricSegmenter split_ground=false labels all ground as road", "[segment]") {
+  semlio::Scan a = semlio_test::segment_scene(600);
+  // Raise part of the scene's ground by a curb: points beyond y = 10 m.
+  for (auto& p : a.points) {
+    if (p.y() > 10.0F && p.z() < -1.7F) p.z() += 0.15F;
+  }
+  semlio::Scan b = a;
+  semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.split_ground = false}).segment(a);
+  semlio::GeometricSegmenter().segment(b);
+  std::size_t sidewalk_a = 0, sidewalk_b = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    CHECK(a.labels[i] != Class::kSidewalk);
+    CHECK(a.labels[i] != Class::kTerrain);
+    sidewalk_a += a.labels[i] == Class::kSidewalk ? 1U : 0U;
+    sidewalk_b += b.labels[i] == Class::kSidewalk ? 1U : 0U;
+  }
+  CHECK(sidewalk_a == 0);
+  CHECK(sidewalk_b > 500);  // the raised side is found behind the curb
+}
+
+TEST_CASE("GeometricSegmenter is deterministic and reusable", "[segment]") {
+  semlio::Scan scan = semlio_test::segment_scene(800);
+  semlio::Scan other = semlio_test::segment_scene(500);
+  const semlio::GeometricSegmenter seg;
+  semlio::Scan a = scan;
+  seg.segment(a);
+  seg.segment(other);  // a different scan in between must not leak state
+  semlio::Scan b = scan;
+  seg.segment(b);
+  semlio::Scan c = scan;
+  semlio::GeometricSegmenter().segment(c);
+  CHECK(a.labels == b.labels);
+  CHECK(a.labels == c.labels);
+}
+
+TEST_CASE("GeometricSegmenter handles degenerate scans", "[segment]") {
+  const semlio::GeometricSegmenter seg;
+  SECTION("empty scan") {
+    semlio::Scan s;
+    seg.segment(s);
+    CHECK(s.labels.empty());
+  }
+  SECTION("stale labels of another size are replaced") {
+    semlio::Scan s;
+    s.points.assign(3, Eigen::Vector3f(5.0F, 0.0F, -1.73F));
+    s.labels.assign(7, Class::kCar);
+    seg.segment(s);
+    CHECK(s.labels.size() == 3);
+  }
+  SECTION("all points in one spot") {
+    for (const Eigen::Vector3f& p : {Eigen::Vector3f(0.0F, 0.0F, 0.0F), Eigen::Vector3f(5.0F, 0.0F, -1.73F),
+                                    Eigen::Vector3f(5.0F, 0.0F, 3.0F)}) {
+      semlio::Scan s;
+      s.points.assign(5000, p);
+      seg.segment(s);
+      REQUIRE(s.labels.size() == 5000);
+      for (const Class c : s.labels) CHECK(c == s.labels.front());
+      CHECK(semlio::index(s.labels.front()) < semlio::kNumClasses);
+    }
+  }
+  SECTION("non-finite and far points") {
+    semlio::Scan s = semlio_test::segment_scene(300);
+    const std::size_t n = s.size();
+    s.points.emplace_back(std::numeric_limits<float>::quiet_NaN(), 0.0F, 0.0F);
+    s.points.emplace_back(std::numeric_limits<float>::infinity(), 1.0F, 0.0F);
+    s.points.emplace_back(5000.0F, -3000.0F, 10.0F);
+    s.points.emplace_back(0.0F, 0.0F, -1e6F);
+    s.labels.clear();
+    seg.segment(s);
+    REQUIRE(s.labels.size() == n + 4);
+    CHECK(s.labels[n] == Class::kUnlabeled);
+    CHECK(s.labels[n + 1] == Class::kUnlabeled);
+    for (const Class c : s.labels) CHECK(semlio::index(c) < semlio::kNumClasses);
+  }
+}
+
+TEST_CASE("GeometricSegmenter rejects bad configs", "[segment]") {
+  CHECK_THROWS_AS(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.cell_size_m = 0.0}), semlio::ConfigError);
+  CHECK_THROWS_AS(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.sectors = 0}), semlio::ConfigError);
+  CHECK_THROWS_WITH(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.sensor_height_m = -1.0}),
+                    Catch::Contains("sensor_height_m"));
+  CHECK_NOTHROW(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{}));
+}
+
+TEST_CASE("GeometricSegmenter on the simulator's urban world", "[segment]") {
+  semlio::sim::SimulatorConfig sc;
+  sc.world = semlio::sim::WorldKind::kUrban;
+  sc.frames = 40;
+  sc.seed = 7;
+  const semlio::sim::Simulator sim(sc);
+  const semlio::GeometricSegmenter seg;
+  semlio::eval::ConfusionMatrix cm;
+  std::vector<Class> truth_all, pred_all;
+  for (const std::size_t f : {0U, 20U, 39U}) {
+    semlio::sim::Frame fr = sim.frame(f);
+    const std::vector<Class> truth = fr.scan.labels;
+    seg.segment(fr.scan);
+    cm.add(truth, fr.scan.labels);
+    truth_all.insert(truth_all.end(), truth.begin(), truth.end());
+    pred_all.insert(pred_all.end(), fr.scan.labels.begin(), fr.scan.labels.end());
+  }
+  const semlio::eval::MiouReport r = cm.report();
+  // Lower bounds well below the README table (urban mIoU ~0.33 over 20 frames).
+  CHECK(r.miou > 0.22);
+  CHECK(r.iou[static_cast<std::size_t>(semlio::index(Class::kRoad))] > 0.7);
+  CHECK(r.iou[static_cast<std::size_t>(semlio::index(Class::kBuilding))] > 0.6);
+  CHECK(r.iou[static_cast<std::size_t>(semlio::index(Class::kCar))] > 0.6);
+  CHECK(group_iou(truth_all, pred_all,
+                  {Class::kRoad, Class::kParking, Class::kSidewalk, Class::kOtherGround, Class::kTerrain}) > 0.9);
+}
+
+TEST_CASE("GeometricSegmenter on a real KITTI scan", "[segment]") {
+  semlio::Scan scan = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  REQUIRE(scan.size() > 100000);
+  const semlio::GeometricSegmenter seg;
+  seg.segment(scan);
+  REQUIRE(scan.labels.size() == scan.size());
+  std::size_t ground = 0, labelled = 0;
+  for (const Class c : scan.labels) {
+    ground += is_ground(c) ? 1U : 0U;
+    labelled += c != Class::kUnlabeled ? 1U : 0U;
+  }
+  const double ground_fraction = static_cast<double>(ground) / static_cast<double>(scan.size());
+  INFO("ground fraction " << ground_fraction);
+  CHECK(ground_fraction > 0.35);  // KITTI urban scans: roughly 40-60 % ground
+  CHECK(ground_fraction < 0.65);
+  CHECK(static_cast<double>(labelled) > 0.8 * static_cast<double>(scan.size()));
+
+  // The 50 SemanticKITTI-labelled points of this scan (they occur bit-exactly
+  // in the full scan): most get a compatible class.
+  const semlio::Scan subset =
+      semlio::io::read_kitti_bin(semlio_test::data_path("kitti/semantickitti_subset/00/velodyne/000000.bin"));
+  const std::vector<std::uint32_t> raw = semlio::io::read_label_file(
+      semlio_test::data_path("kitti/semantickitti_subset/00/labels/000000.label"), subset.size());
+  std::size_t found = 0, evaluated = 0, agree = 0;
+  for (std::size_t k = 0; k < subset.size(); ++k) {
+    const Class truth = semlio::learning_class(static_cast<std::uint16_t>(raw[k] & 0xFFFFU));
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      if (scan.points[i] != subset.points[k]) continue;
+      ++found;
+      if (truth != Class::kUnlabeled) {
+        ++evaluated;
+        agree += compatible(truth, scan.labels[i]) ? 1U : 0U;
+      }
+      break;
+    }
+  }
+  INFO("agreement " << agree << " / " << evaluated);
+  CHECK(found == subset.size());
+  REQUIRE(evaluated > 40);
+  CHECK(static_cast<double>(agree) >= 0.6 * static_cast<double>(evaluated));
+}
