@@ -1,1 +1,5 @@
 # Examples of the kitti area.
+find_package(CLI11 REQUIRED)
+find_package(yaml-cpp REQUIRED)
+semlio_add_example(semlio_kitti kitti/semlio_kitti.cpp)
+target_link_libraries(semlio_kitti PRIVATE CLI11::CLI11 yaml-cpp)

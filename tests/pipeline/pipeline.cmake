@@ -1,1 +1,4 @@
-set(SEMLIO_TESTS_pipeline_pipeline)
+set(SEMLIO_TESTS_pipeline_pipeline
+  keyframe/test_keyframe_policies.cpp
+  pipeline/test_odometry.cpp
+  pipeline/test_registration.cpp)

@@ -1,0 +1,125 @@
+#pragma once
+// YAML overrides of semlio::PipelineSettings for semlio_kitti. Every key is
+// optional; an unknown section or key is an error (typos must not be silently
+// ignored). The README lists every key with its default.
+
+#include <yaml-cpp/yaml.h>
+
+#include <functional>
+#include <map>
+#include <string>
+
+#include <semlio/core/error.hpp>
+#include <semlio/pipeline/presets.hpp>
+
+namespace semlio_examples {
+
+namespace detail {
+
+// A section maps key -> setter that reads the YAML node into a field.
+using Setters = std::map<std::string, std::function<void(const YAML::Node&)>>;
+
+template <typename T>
+std::function<void(const YAML::Node&)> set(T& field) {
+  return [&field](const YAML::Node& n) { field = n.as<T>(); };
+}
+
+inline void apply(const YAML::Node& section, const std::string& name, const Setters& setters,
+                  const std::string& path) {
+  if (!section) return;
+  if (!section.IsMap()) throw semlio::ConfigError(path + ": section '" + name + "' must be a map");
+  for (const auto& kv : section) {
+    const auto key = kv.first.as<std::string>();
+    const auto it = setters.find(key);
+    if (it == setters.end()) throw semlio::ConfigError(path + ": unknown key '" + name + "." + key + "'");
+    try {
+      it->second(kv.second);
+    } catch (const YAML::Exception& e) {
+      throw semlio::ConfigError(path + ": bad value for '" + name + "." + key + "': " + e.what());
+    }
+  }
+}
+
+}  // namespace detail
+
+/// Applies the overrides in the YAML file at `path` to `s`. Throws
+/// semlio::ConfigError (unknown key, bad value) or semlio::IoError.
+inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings& s) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw semlio::IoError(path + ": cannot open the config file");
+  } catch (const YAML::Exception& e) {
+    throw semlio::ConfigError(path + ": " + e.what());
+  }
+  if (!root || root.IsNull()) return;
+  if (!root.IsMap()) throw semlio::ConfigError(path + ": the config must be a YAML map");
+  using detail::set;
+  auto& o = s.odometry;
+  const std::map<std::string, detail::Setters> sections = {
+      {"odometry",
+       {{"kitti_vertical_correction", set(o.kitti_vertical_correction)},
+        {"min_frame_interval_s", set(o.min_frame_interval_s)},
+        {"min_features", set(o.min_features)},
+        {"max_correction_m", set(o.max_correction_m)},
+        {"max_correction_rad", set(o.max_correction_rad)}}},
+      {"preprocess",
+       {{"min_range_m", set(o.preprocess.min_range_m)},
+        {"max_range_m", set(o.preprocess.max_range_m)},
+        {"crop_ego_box", set(o.preprocess.crop_ego_box)}}},
+      {"features",
+       {{"neighbours", set(o.features.neighbours)},
+        {"sectors", set(o.features.sectors)},
+        {"max_corners_per_sector", set(o.features.max_corners_per_sector)},
+        {"corner_threshold_m", set(o.features.corner_threshold_m)},
+        {"surface_threshold_m", set(o.features.surface_threshold_m)},
+        {"occlusion_depth_gap_m", set(o.features.occlusion_depth_gap_m)},
+        {"parallel_beam_ratio", set(o.features.parallel_beam_ratio)},
+        {"surface_leaf_m", set(o.features.surface_leaf_m)}}},
+      {"map",
+       {{"radius_m", set(o.map.radius_m)},
+        {"corner_leaf_m", set(o.map.corner_leaf_m)},
+        {"surface_leaf_m", set(o.map.surface_leaf_m)},
+        {"shape_neighbours", set(o.map.shape_neighbours)},
+        {"exclude_dynamic", set(o.map.exclude_dynamic)}}},
+      {"solver",
+       {{"max_iterations", set(o.solver.max_iterations)},
+        {"reassociate_every", set(o.solver.reassociate_every)},
+        {"levenberg_marquardt", set(o.solver.levenberg_marquardt)},
+        {"translation_tolerance_m", set(o.solver.translation_tolerance_m)},
+        {"rotation_tolerance_rad", set(o.solver.rotation_tolerance_rad)},
+        {"degeneracy_threshold", set(o.solver.degeneracy_threshold)},
+        {"remap_degenerate", set(o.solver.remap_degenerate)},
+        {"min_residuals", set(o.solver.min_residuals)}}},
+      {"nearest", {{"k", set(s.nearest.k)}, {"max_distance_m", set(s.nearest.max_distance_m)}}},
+      {"normal",
+       {{"candidates", set(s.normal.candidates)},
+        {"keep", set(s.normal.keep)},
+        {"scan_neighbours", set(s.normal.scan_neighbours)},
+        {"max_angle_rad", set(s.normal.max_angle_rad)},
+        {"max_distance_m", set(s.normal.max_distance_m)}}},
+      {"line", {{"two_point", set(s.line.two_point)}, {"max_linearity_ratio", set(s.line.max_linearity_ratio)}}},
+      {"plane",
+       {{"three_point", set(s.plane.three_point)},
+        {"max_planarity_ratio", set(s.plane.max_planarity_ratio)},
+        {"min_spread_ratio", set(s.plane.min_spread_ratio)}}},
+      {"pose_threshold",
+       {{"translation_threshold_m", set(s.pose_threshold.translation_threshold_m)},
+        {"rotation_threshold_rad", set(s.pose_threshold.rotation_threshold_rad)}}},
+      {"semantic_keyframes",
+       {{"translation_threshold_m", set(s.semantic_keyframes.translation_threshold_m)},
+        {"rotation_threshold_rad", set(s.semantic_keyframes.rotation_threshold_rad)},
+        {"stability_threshold", set(s.semantic_keyframes.stability_threshold)},
+        {"weight_min", set(s.semantic_keyframes.weight_min)},
+        {"laplace_count", set(s.semantic_keyframes.laplace_count)}}},
+  };
+  for (const auto& kv : root) {
+    const auto name = kv.first.as<std::string>();
+    const auto it = sections.find(name);
+    if (it == sections.end()) throw semlio::ConfigError(path + ": unknown section '" + name + "'");
+    detail::apply(kv.second, name, it->second, path);
+  }
+}
+
+}  // namespace semlio_examples

@@ -1,0 +1,336 @@
+#pragma once
+/// \file
+/// Odometry<Segmenter, Associator, Residuals, KeyframePolicy>: the paper's
+/// scan-to-map lidar odometry (§3.1-3.2) as one straight pass per scan:
+/// predict (constant velocity) -> deskew (slot) -> segment -> preprocess and
+/// rings -> LOAM features (eq. 2) -> Gauss-Newton against the local map
+/// (Algorithm 1 association, eq. 8-13) -> keyframe decision (eq. 14-22) ->
+/// map update. Data-dependent failures are statuses in the report; the pose
+/// then follows the prediction and is never NaN.
+
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <optional>
+#include <utility>
+
+#include <semlio/concepts.hpp>
+#include <semlio/core/error.hpp>
+#include <semlio/core/scan.hpp>
+#include <semlio/features/loam_features.hpp>
+#include <semlio/features/preprocess.hpp>
+#include <semlio/features/rings.hpp>
+#include <semlio/features/sensor_model.hpp>
+#include <semlio/lie/se3.hpp>
+#include <semlio/map/local_map.hpp>
+#include <semlio/pipeline/scan_to_map.hpp>
+#include <semlio/solve/gauss_newton.hpp>
+
+namespace semlio {
+
+/// Settings of Odometry. Every field has a documented default; the presets in
+/// pipeline/presets.hpp fill the policy-specific parts.
+struct OdometryConfig {
+  SensorModel sensor = SensorModel::hdl64e();  ///< beam table for ring inference
+  RingConfig rings{};                               ///< how rings are inferred
+  bool kitti_vertical_correction = false;           ///< rotate points by 0.205 deg (on for real KITTI)
+  PreprocessConfig preprocess{};                    ///< range crop and ego box
+  LoamFeatureConfig features{};                     ///< eq. 2 feature extraction
+  LocalMapConfig map{};                             ///< keyframe local map
+  GaussNewtonConfig solver{};                       ///< scan-to-map solver
+  double min_frame_interval_s = 0.0;                ///< skip scans closer in time than this (LIO-SAM: 0.15 s); 0 = every scan
+  std::size_t min_features = 50;                    ///< fewer corner+surface features: no solve, keep prediction
+  double max_correction_m = 2.0;                    ///< solutions farther than this from the prediction are rejected
+  double max_correction_rad = 0.3;                  ///< same for rotation
+};
+
+/// What happened to a frame.
+enum class OdometryStatus {
+  kInitialized,         ///< first processed frame: defines the map frame
+  kTracked,             ///< solved against the map
+  kDegenerate,          ///< solved, but some direction was unconstrained (kept from the prediction)
+  kSkipped,             ///< closer in time than min_frame_interval_s; pose = prediction (interpolate later)
+  kTooFewFeatures,      ///< empty or featureless scan; pose = prediction
+  kSolverFailed,        ///< too few correspondences or numerical failure; pose = prediction
+  kRejectedJump,        ///< solution too far from the prediction; pose = prediction
+  kTimeWentBackwards,   ///< stamp earlier than the previous frame's; frame ignored, pose = last pose
+};
+
+/// Name of a status, as written to report.json.
+constexpr const char* to_string(OdometryStatus s) noexcept {
+  switch (s) {
+    case OdometryStatus::kInitialized: return "initialized";
+    case OdometryStatus::kTracked: return "tracked";
+    case OdometryStatus::kDegenerate: return "degenerate";
+    case OdometryStatus::kSkipped: return "skipped";
+    case OdometryStatus::kTooFewFeatures: return "too_few_features";
+    case OdometryStatus::kSolverFailed: return "solver_failed";
+    case OdometryStatus::kRejectedJump: return "rejected_jump";
+    case OdometryStatus::kTimeWentBackwards: return "time_went_backwards";
+  }
+  return "unknown";
+}
+
+/// Wall time of each stage of one frame [ms].
+struct StageTimings {
+  double preprocess_ms = 0.0;  ///< deskew, preprocess, rings, vertical correction
+  double segment_ms = 0.0;     ///< segmenter
+  double features_ms = 0.0;    ///< eq. 2 features
+  double solve_ms = 0.0;       ///< association + Gauss-Newton
+  double keyframe_ms = 0.0;    ///< keyframe decision
+  double map_ms = 0.0;         ///< local map update (keyframes only)
+  double total_ms = 0.0;       ///< whole frame
+};
+
+/// Everything Odometry::process reports about one frame.
+struct FrameReport {
+  std::size_t frame = 0;                 ///< index of the call (0-based)
+  double stamp_s = 0.0;                  ///< scan stamp [s]
+  SE3d T_map_lidar;                      ///< pose of the lidar in the map (= first lidar) frame
+  OdometryStatus status = OdometryStatus::kInitialized;
+  SolveReport solve;                     ///< solver details (iterations, costs, eigenvalues, Hessian)
+  std::size_t points = 0;                ///< points after preprocessing
+  std::size_t corners = 0;               ///< corner features
+  std::size_t surfaces = 0;              ///< surface features
+  std::size_t corner_matches = 0;        ///< corners with correspondences (final association)
+  std::size_t surface_matches = 0;       ///< surfaces with correspondences (final association)
+  bool keyframe = false;                 ///< became a keyframe
+  StageTimings timings;                  ///< per-stage wall time
+};
+
+/// No motion compensation: the right choice for KITTI odometry scans, which
+/// are already de-skewed. The lidar-inertial issue adds IMU/constant-velocity
+/// deskewers with the same signature.
+struct NoDeskew {
+  /// Leaves the scan as it is.
+  void deskew(Scan& /*scan*/, const SE3d& /*T_prev_current_predicted*/) const {}
+};
+
+/// The scan-to-map odometry front end. Owns its policies by value. Not
+/// thread-safe: one instance per sensor stream. After warm-up its per-frame
+/// work reuses its buffers.
+template <Segmenter S, typename A, typename Residuals, KeyframePolicy K, typename D = NoDeskew>
+class Odometry;
+
+/// Specialisation carrying the two residual policies of LoamResiduals.
+template <Segmenter S, typename A, Residual RC, Residual RS, KeyframePolicy K, typename D>
+  requires Associator<A, FeatureMap>
+class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
+ public:
+  using Config = OdometryConfig;
+
+  /// Odometry from configured policies (CTAD deduces the types).
+  Odometry(S segmenter, A associator, LoamResiduals<RC, RS> residuals, K keyframe_policy,
+           const Config& config = {}, D deskewer = {})
+      : config_(config),
+        segmenter_(std::move(segmenter)),
+        keyframe_policy_(std::move(keyframe_policy)),
+        deskewer_(std::move(deskewer)),
+        extractor_(config.features),
+        map_(config.map),
+        problem_(associator, residuals) {
+    config_.preprocess.validate();
+    config_.sensor.validate();
+  }
+
+  /// Processes one scan (sensor frame, stamp in scan.stamp_s) and returns the
+  /// report. The scan is consumed as a working buffer.
+  FrameReport process(Scan& scan) {
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    auto ms_since = [](Clock::time_point a) {
+      return std::chrono::duration<double, std::milli>(Clock::now() - a).count();
+    };
+    FrameReport report;
+    report.frame = frame_count_++;
+    report.stamp_s = scan.stamp_s;
+
+    // 1. Predict with constant velocity (per frame, scaled by the time step).
+    if (processed_ > 0 && scan.stamp_s < last_stamp_s_) {
+      report.status = OdometryStatus::kTimeWentBackwards;
+      report.T_map_lidar = T_last_;
+      report.timings.total_ms = ms_since(t0);
+      return report;
+    }
+    const SE3d T_pred = predict(scan.stamp_s);
+    report.T_map_lidar = T_pred;
+    if (processed_ > 0 && config_.min_frame_interval_s > 0.0 &&
+        scan.stamp_s - last_stamp_s_ < config_.min_frame_interval_s) {
+      report.status = OdometryStatus::kSkipped;
+      report.timings.total_ms = ms_since(t0);
+      return report;
+    }
+
+    // 2. Deskew (slot), preprocessing, rings, the KITTI vertical-angle fix.
+    auto t = Clock::now();
+    deskewer_.deskew(scan, T_last_.inverse() * T_pred);
+    preprocess(scan, config_.preprocess);
+    report.points = scan.size();
+    if (!scan.empty()) {
+      infer_rings(scan, config_.sensor, config_.rings);
+      if (config_.kitti_vertical_correction) {
+        for (auto& p : scan.points) p = correct_vertical_angle(p, kKittiVerticalCorrectionRad);
+      }
+    }
+    report.timings.preprocess_ms = ms_since(t);
+
+    // 3. Segment: one label per point.
+    t = Clock::now();
+    segmenter_.segment(scan);
+    report.timings.segment_ms = ms_since(t);
+
+    // 4. Features (eq. 2).
+    t = Clock::now();
+    if (!scan.empty()) {
+      extractor_.extract(scan, features_);
+    } else {
+      features_.corners.clear();
+      features_.surfaces.clear();
+    }
+    report.corners = features_.corners.size();
+    report.surfaces = features_.surfaces.size();
+    histogram_ = label_histogram(scan);
+    report.timings.features_ms = ms_since(t);
+
+    if (report.corners + report.surfaces < config_.min_features) {
+      report.status = OdometryStatus::kTooFewFeatures;
+      accept(report, T_pred, scan.stamp_s, /*tracked=*/false);
+      report.timings.total_ms = ms_since(t0);
+      return report;
+    }
+
+    if (map_.keyframe_count() == 0) {
+      // The first usable frame defines the map frame.
+      report.status = OdometryStatus::kInitialized;
+      t = Clock::now();
+      add_keyframe(SE3d());
+      report.keyframe = true;
+      report.timings.map_ms = ms_since(t);
+      accept(report, SE3d(), scan.stamp_s, /*tracked=*/true);
+      report.timings.total_ms = ms_since(t0);
+      return report;
+    }
+
+    // 5-7. Associate (Algorithm 1) and solve eq. 13 by Gauss-Newton.
+    t = Clock::now();
+    SE3d T = T_pred;
+    problem_.set_features(features_.corners, features_.surfaces);
+    report.solve = gauss_newton(problem_, T, config_.solver);
+    const auto [cm, sm] = problem_.matched_counts();
+    report.corner_matches = cm;
+    report.surface_matches = sm;
+    report.timings.solve_ms = ms_since(t);
+    if (!report.solve.ok()) {
+      report.status = OdometryStatus::kSolverFailed;
+      accept(report, T_pred, scan.stamp_s, /*tracked=*/false);
+      report.timings.total_ms = ms_since(t0);
+      return report;
+    }
+    const SE3d correction = T_pred.inverse() * T;
+    if (!T.matrix().allFinite() || correction.translation().norm() > config_.max_correction_m ||
+        correction.so3().angle() > config_.max_correction_rad) {
+      report.status = OdometryStatus::kRejectedJump;
+      accept(report, T_pred, scan.stamp_s, /*tracked=*/false);
+      report.timings.total_ms = ms_since(t0);
+      return report;
+    }
+    accumulate_ranks(problem_.corner_matches(), rank_histogram_);
+    accumulate_ranks(problem_.surface_matches(), rank_histogram_);
+    report.status = report.solve.degenerate() ? OdometryStatus::kDegenerate : OdometryStatus::kTracked;
+
+    // 8. Keyframe decision (Algorithm 2).
+    t = Clock::now();
+    KeyframeEvidence evidence;
+    evidence.T_lastkf_current = T_lastkf_.inverse() * T;
+    evidence.elapsed_s = scan.stamp_s - lastkf_stamp_s_;
+    evidence.current = &histogram_;
+    evidence.last_keyframe = &lastkf_histogram_;
+    report.keyframe = keyframe_policy_.is_keyframe(evidence);
+    report.timings.keyframe_ms = ms_since(t);
+
+    // 9. Map update, on keyframes only.
+    if (report.keyframe) {
+      t = Clock::now();
+      add_keyframe(T);
+      lastkf_stamp_s_ = scan.stamp_s;
+      report.timings.map_ms = ms_since(t);
+    }
+    accept(report, T, scan.stamp_s, /*tracked=*/true);
+    report.timings.total_ms = ms_since(t0);
+    return report;
+  }
+
+  /// Association-rank histogram over every processed frame (eq. 23; index = rank).
+  [[nodiscard]] const RankHistogram& rank_histogram() const noexcept { return rank_histogram_; }
+  /// Number of keyframes so far.
+  [[nodiscard]] std::size_t keyframe_count() const noexcept { return map_.keyframe_count(); }
+  /// The local map (keyframes and the maps of the last build).
+  [[nodiscard]] const LocalMap& local_map() const noexcept { return map_; }
+  /// Latest pose of the lidar in the map frame.
+  [[nodiscard]] const SE3d& pose() const noexcept { return T_last_; }
+  /// The settings.
+  [[nodiscard]] const Config& config() const noexcept { return config_; }
+
+ private:
+  SE3d predict(double stamp_s) const {
+    if (processed_ < 2) return T_last_;
+    const double dt_prev = last_stamp_s_ - prev_stamp_s_;
+    const double dt = stamp_s - last_stamp_s_;
+    SE3d::Vector6 xi = velocity_.log();
+    // Scale the last inter-frame motion to this time step when stamps are
+    // usable; otherwise assume one frame.
+    if (dt_prev > 1e-6 && dt >= 0.0 && std::isfinite(dt)) xi *= std::min(dt / dt_prev, 3.0);
+    return T_last_ * SE3d::exp(xi);
+  }
+
+  void accept(FrameReport& report, const SE3d& T, double stamp_s, bool tracked) {
+    report.T_map_lidar = T;
+    if (processed_ > 0) {
+      velocity_ = tracked || processed_ < 2 ? T_last_.inverse() * T : velocity_;
+      prev_stamp_s_ = last_stamp_s_;
+    }
+    T_last_ = T;
+    last_stamp_s_ = stamp_s;
+    ++processed_;
+  }
+
+  void add_keyframe(const SE3d& T) {
+    map_.add_keyframe(T, features_.corners, features_.surfaces);
+    map_.build(T.translation());
+    problem_.set_maps(map_.corners(), map_.surfaces());
+    T_lastkf_ = T;
+    lastkf_histogram_ = histogram_;
+  }
+
+  Config config_;
+  S segmenter_;
+  K keyframe_policy_;
+  D deskewer_;
+  LoamFeatureExtractor extractor_;
+  LocalMap map_;
+  ScanToMapProblem<A, RC, RS> problem_;
+  LoamFeatures features_;
+  LabelHistogram histogram_{};
+  LabelHistogram lastkf_histogram_{};
+  RankHistogram rank_histogram_{};
+  SE3d T_last_;
+  SE3d velocity_;  // T_prev_last: motion over the last frame
+  SE3d T_lastkf_;
+  double last_stamp_s_ = 0.0;
+  double prev_stamp_s_ = 0.0;
+  double lastkf_stamp_s_ = 0.0;
+  std::size_t frame_count_ = 0;
+  std::size_t processed_ = 0;
+};
+
+/// Deduction guides: policies by value.
+template <typename S, typename A, typename RC, typename RS, typename K>
+Odometry(S, A, LoamResiduals<RC, RS>, K) -> Odometry<S, A, LoamResiduals<RC, RS>, K, NoDeskew>;
+template <typename S, typename A, typename RC, typename RS, typename K>
+Odometry(S, A, LoamResiduals<RC, RS>, K, const OdometryConfig&)
+    -> Odometry<S, A, LoamResiduals<RC, RS>, K, NoDeskew>;
+template <typename S, typename A, typename RC, typename RS, typename K, typename D>
+Odometry(S, A, LoamResiduals<RC, RS>, K, const OdometryConfig&, D)
+    -> Odometry<S, A, LoamResiduals<RC, RS>, K, D>;
+
+}  // namespace semlio

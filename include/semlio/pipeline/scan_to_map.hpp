@@ -1,0 +1,128 @@
+#pragma once
+/// \file
+/// Scan-to-map registration as a least-squares problem (paper §3.1, eq. 13):
+/// corner features against the corner map with a line residual, surface
+/// features against the surface map with a plane residual, each associated by
+/// the same Associator policy and re-associated between Gauss-Newton
+/// iterations. Also the association-rank statistics of eq. 23.
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+
+#include <semlio/concepts.hpp>
+#include <semlio/features/loam_features.hpp>
+#include <semlio/map/feature_map.hpp>
+#include <semlio/solve/gauss_newton.hpp>
+#include <semlio/solve/normal_equations.hpp>
+
+namespace semlio {
+
+/// The two residual policies of a LOAM-style front end: corners use `corner`
+/// (a line residual), surfaces `surface` (a plane residual).
+template <Residual CornerResidual, Residual SurfaceResidual>
+struct LoamResiduals {
+  CornerResidual corner;    ///< residual of corner features (point-to-line)
+  SurfaceResidual surface;  ///< residual of surface features (point-to-plane)
+};
+
+/// How often the i-th nearest candidate (i = 1..15) was used (eq. 23).
+using RankHistogram = std::array<std::uint64_t, 16>;
+
+/// Adds the ranks of every kept match to hist (index = rank, 1..15).
+inline void accumulate_ranks(const Correspondences& matches, RankHistogram& hist) noexcept {
+  for (const FeatureMatches& m : matches) {
+    for (int j = 0; j < m.count; ++j) {
+      const auto rank = m.rank[static_cast<std::size_t>(j)];
+      if (rank < hist.size()) ++hist[rank];
+    }
+  }
+}
+
+/// Binds the features of one frame and a corner/surface map pair into the
+/// solver's LeastSquaresProblem. Non-owning: the features and maps must
+/// outlive their binding. Reuses its correspondence buffers across frames.
+/// FeatureCloud is any type with `points` (scan frame) and `labels` vectors
+/// (features::FeatureSet, Scan).
+template <typename A, Residual CornerResidual, Residual SurfaceResidual, typename FeatureCloud = FeatureSet>
+  requires Associator<A, FeatureMap>
+class ScanToMapProblem {
+ public:
+  /// Problem with its own copies of the associators (one per map) and residuals.
+  ScanToMapProblem(const A& associator, const LoamResiduals<CornerResidual, SurfaceResidual>& residuals)
+      : corner_assoc_(associator), surface_assoc_(associator), residuals_(residuals) {}
+
+  /// Binds the maps (map frame). Call when the local map was rebuilt.
+  void set_maps(const FeatureMap& corner_map, const FeatureMap& surface_map) {
+    corner_map_ = &corner_map;
+    surface_map_ = &surface_map;
+    corner_assoc_.set_map(corner_map);
+    surface_assoc_.set_map(surface_map);
+  }
+
+  /// Binds this frame's features (scan frame; labels empty or one per point).
+  /// Call once per frame.
+  void set_features(const FeatureCloud& corners, const FeatureCloud& surfaces) {
+    corners_ = &corners;
+    surfaces_ = &surfaces;
+    corner_assoc_.set_scan(corners.points);
+    surface_assoc_.set_scan(surfaces.points);
+  }
+
+  /// Re-associates every feature at pose T_map_scan.
+  void associate(const SE3d& T_map_scan) {
+    corner_assoc_.associate(T_map_scan, corner_matches_);
+    surface_assoc_.associate(T_map_scan, surface_matches_);
+  }
+
+  /// Adds every valid residual at T_map_scan to eq (eq. 13, squared).
+  void linearize(const SE3d& T_map_scan, NormalEquations& eq) const {
+    add_terms(*corners_, corner_matches_, *corner_map_, residuals_.corner, T_map_scan, eq);
+    add_terms(*surfaces_, surface_matches_, *surface_map_, residuals_.surface, T_map_scan, eq);
+  }
+
+  /// Correspondences of the last association, per corner feature.
+  [[nodiscard]] const Correspondences& corner_matches() const noexcept { return corner_matches_; }
+  /// Correspondences of the last association, per surface feature.
+  [[nodiscard]] const Correspondences& surface_matches() const noexcept { return surface_matches_; }
+
+  /// Features with at least one match in the last association (corner, surface).
+  [[nodiscard]] std::pair<std::size_t, std::size_t> matched_counts() const noexcept {
+    return {count_matched(corner_matches_), count_matched(surface_matches_)};
+  }
+
+ private:
+  template <typename R>
+  static void add_terms(const FeatureCloud& features, const Correspondences& matches, const FeatureMap& map,
+                        const R& residual, const SE3d& T_map_scan, NormalEquations& eq) {
+    const std::size_t n = std::min(features.size(), matches.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      if (matches[i].count == 0) continue;
+      FeaturePoint f;
+      f.p_scan = features.points[i].template cast<double>();
+      f.label = features.labels.size() == features.points.size() ? features.labels[i] : Class::kUnlabeled;
+      const auto term = residual.evaluate(f, map.gather(matches[i]), T_map_scan);
+      if (term.valid) eq.add<R::kDim>(term.r, term.J_r_xi, term.weight);
+    }
+  }
+
+  static std::size_t count_matched(const Correspondences& c) noexcept {
+    std::size_t n = 0;
+    for (const auto& m : c) n += m.count > 0 ? 1U : 0U;
+    return n;
+  }
+
+  A corner_assoc_;
+  A surface_assoc_;
+  LoamResiduals<CornerResidual, SurfaceResidual> residuals_;
+  const FeatureMap* corner_map_ = nullptr;
+  const FeatureMap* surface_map_ = nullptr;
+  const FeatureCloud* corners_ = nullptr;
+  const FeatureCloud* surfaces_ = nullptr;
+  Correspondences corner_matches_;
+  Correspondences surface_matches_;
+};
+
+}  // namespace semlio

@@ -1,0 +1,141 @@
+#include <catch2/catch.hpp>
+
+#include <semlio/associate/nearest_k.hpp>
+#include <semlio/associate/normal_consistency.hpp>
+#include <semlio/io/kitti.hpp>
+#include <semlio/keyframe/pose_threshold.hpp>
+#include <semlio/keyframe/semantic_adaptive.hpp>
+#include <semlio/pipeline/interpolate.hpp>
+#include <semlio/pipeline/odometry.hpp>
+#include <semlio/residual/point_to_line.hpp>
+#include <semlio/residual/point_to_plane.hpp>
+#include <semlio/residual/semantic_weighted.hpp>
+#include <semlio/segment/scan_labels.hpp>
+
+#include <semlio_test/data.hpp>
+
+using namespace semlio;
+
+namespace {
+
+Scan kitti_scan(int i, double stamp_s) {
+  Scan s = io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/00000" + std::to_string(i) + ".bin"));
+  s.stamp_s = stamp_s;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("Odometry tracks the two real KITTI scans", "[pipeline]") {
+  Odometry odom(ScanLabels{}, NormalConsistency{}, LoamResiduals{PointToLine{}, PointToPlane{}},
+                PoseThreshold{}, OdometryConfig{.kitti_vertical_correction = true});
+  Scan a = kitti_scan(0, 0.0);
+  const FrameReport r0 = odom.process(a);
+  CHECK(r0.status == OdometryStatus::kInitialized);
+  CHECK(r0.keyframe);
+  CHECK(r0.surfaces > 1000);
+  CHECK(r0.corners > 100);
+  Scan b = kitti_scan(1, 0.1);
+  const FrameReport r1 = odom.process(b);
+  INFO("status " << to_string(r1.status) << " iterations " << r1.solve.iterations << " t "
+                 << r1.T_map_lidar.translation().transpose());
+  CHECK((r1.status == OdometryStatus::kTracked || r1.status == OdometryStatus::kDegenerate));
+  // Scan alignment gives ~0.69 m forward between these frames (data README).
+  CHECK(r1.T_map_lidar.translation().x() == Approx(0.69).margin(0.08));
+  CHECK(std::abs(r1.T_map_lidar.translation().y()) < 0.1);
+  CHECK(std::abs(r1.T_map_lidar.translation().z()) < 0.1);
+  CHECK(r1.T_map_lidar.so3().angle() < 0.02);
+  CHECK(r1.surface_matches > 500);
+  std::uint64_t ranks = 0;
+  for (const auto n : odom.rank_histogram()) ranks += n;
+  CHECK(ranks > 0);
+}
+
+namespace {
+
+bool finite(const SE3d& T) { return T.matrix().allFinite(); }
+
+auto make_full() {
+  return Odometry(ScanLabels{}, NormalConsistency{},
+                  LoamResiduals{SemanticWeighted<PointToLine>{}, SemanticWeighted<PointToPlane>{}},
+                  SemanticAdaptive{}, OdometryConfig{.kitti_vertical_correction = true});
+}
+
+}  // namespace
+
+TEST_CASE("Odometry survives bad input without NaN poses", "[pipeline]") {
+  auto odom = make_full();
+  Scan a = kitti_scan(0, 0.0);
+  Scan b = kitti_scan(1, 0.1);
+  REQUIRE(odom.process(a).status == OdometryStatus::kInitialized);
+  const FrameReport r1 = odom.process(b);
+  REQUIRE((r1.status == OdometryStatus::kTracked || r1.status == OdometryStatus::kDegenerate));
+
+  SECTION("an empty scan keeps the prediction") {
+    Scan empty;
+    empty.stamp_s = 0.2;
+    const FrameReport r = odom.process(empty);
+    CHECK(r.status == OdometryStatus::kTooFewFeatures);
+    CHECK(finite(r.T_map_lidar));
+    // Constant velocity: one more frame's motion ahead of frame 1.
+    CHECK(r.T_map_lidar.translation().x() == Approx(2.0 * r1.T_map_lidar.translation().x()).margin(0.05));
+  }
+  SECTION("a scan with no features keeps the prediction") {
+    Scan blob;
+    for (int i = 0; i < 500; ++i) blob.points.emplace_back(5.0F, 0.0F, -1.0F);
+    blob.stamp_s = 0.2;
+    const FrameReport r = odom.process(blob);
+    CHECK(r.status == OdometryStatus::kTooFewFeatures);
+    CHECK(finite(r.T_map_lidar));
+  }
+  SECTION("a scan that is all dynamic objects still gives a finite pose") {
+    Scan cars = kitti_scan(1, 0.2);
+    cars.labels.assign(cars.size(), Class::kCar);
+    const FrameReport r = odom.process(cars);
+    CHECK(finite(r.T_map_lidar));
+    CHECK(r.status != OdometryStatus::kTimeWentBackwards);
+  }
+  SECTION("a frame repeated twice stays where it is") {
+    Scan again = kitti_scan(1, 0.2);
+    const FrameReport r = odom.process(again);
+    CHECK(r.solve.ok());
+    CHECK(finite(r.T_map_lidar));
+    CHECK((r.T_map_lidar.translation() - r1.T_map_lidar.translation()).norm() < 0.1);
+  }
+  SECTION("a sudden 10 m jump is not followed") {
+    Scan jumped = kitti_scan(1, 0.2);
+    for (auto& p : jumped.points) p.x() += 10.0F;
+    const FrameReport r = odom.process(jumped);
+    CHECK(finite(r.T_map_lidar));
+    CHECK((r.status == OdometryStatus::kSolverFailed || r.status == OdometryStatus::kRejectedJump ||
+           r.status == OdometryStatus::kTracked || r.status == OdometryStatus::kDegenerate));
+    // Whatever it decides, it must not teleport by the jump.
+    CHECK((r.T_map_lidar.translation() - r1.T_map_lidar.translation()).norm() < 2.5);
+  }
+  SECTION("time going backwards is reported and the frame ignored") {
+    Scan old = kitti_scan(1, 0.05);
+    const FrameReport r = odom.process(old);
+    CHECK(r.status == OdometryStatus::kTimeWentBackwards);
+    CHECK((r.T_map_lidar.matrix() - r1.T_map_lidar.matrix()).norm() == 0.0);
+  }
+}
+
+TEST_CASE("Odometry skips scans closer than min_frame_interval_s and interpolates them", "[pipeline]") {
+  OdometryConfig config;
+  config.kitti_vertical_correction = true;
+  config.min_frame_interval_s = 0.15;
+  Odometry odom(ScanLabels{}, NearestK{}, LoamResiduals{PointToLine{}, PointToPlane{}}, PoseThreshold{}, config);
+  Scan a = kitti_scan(0, 0.0);
+  Scan b = kitti_scan(1, 0.1);
+  Scan c = kitti_scan(1, 0.2);
+  const auto r0 = odom.process(a);
+  const auto r1 = odom.process(b);
+  const auto r2 = odom.process(c);
+  CHECK(r0.status == OdometryStatus::kInitialized);
+  CHECK(r1.status == OdometryStatus::kSkipped);
+  CHECK(r2.solve.ok());
+  std::vector<SE3d> poses{r0.T_map_lidar, r1.T_map_lidar, r2.T_map_lidar};
+  fill_skipped_poses(poses, {0.0, 0.1, 0.2}, {true, false, true});
+  // Halfway in time: halfway along the constant-twist path.
+  CHECK((poses[1].translation() - 0.5 * r2.T_map_lidar.translation()).norm() < 1e-3);
+}

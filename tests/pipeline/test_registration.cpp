@@ -1,0 +1,231 @@
+#include <catch2/catch.hpp>
+
+#include <semlio/associate/nearest_k.hpp>
+#include <semlio/associate/normal_consistency.hpp>
+#include <semlio/io/kitti.hpp>
+#include <semlio/io/ply.hpp>
+#include <semlio/pipeline/registration.hpp>
+#include <semlio/residual/point_to_line.hpp>
+#include <semlio/residual/point_to_plane.hpp>
+#include <semlio/residual/semantic_weighted.hpp>
+#include <semlio/search/kdtree.hpp>
+#include <semlio/search/voxel_grid.hpp>
+
+#include <semlio_test/data.hpp>
+
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <vector>
+
+using namespace semlio;
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+SE3d read_matrix4(const std::string& path) {
+  std::ifstream in(path);
+  Eigen::Matrix4d T;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) in >> T(i, j);
+  REQUIRE(in);
+  return SE3d(T);
+}
+
+double angle_deg(const SE3d& a, const SE3d& b) { return (a.inverse() * b).so3().angle() / kDeg; }
+double distance_m(const SE3d& a, const SE3d& b) { return (a.translation() - b.translation()).norm(); }
+
+const LoamResiduals<PointToLine, PointToPlane> kPlain{PointToLine{}, PointToPlane{}};
+const LoamResiduals<SemanticWeighted<PointToLine>, SemanticWeighted<PointToPlane>> kWeighted{
+    SemanticWeighted<PointToLine>{}, SemanticWeighted<PointToPlane>{}};
+
+// An independent point-to-plane ICP (nearest neighbour, PCA normals from
+// Eigen's solver, small-angle linearisation), deliberately written without the
+// library's features, maps, residuals or solver.
+SE3d plane_icp(const std::vector<Eigen::Vector3f>& source, const std::vector<Eigen::Vector3f>& target, SE3d T) {
+  const KdTree3f tree(target);
+  std::vector<Eigen::Vector3d> normals(target.size(), Eigen::Vector3d::Zero());
+  std::vector<bool> planar(target.size(), false);
+  std::array<std::uint32_t, 10> idx{};
+  std::array<float, 10> d2{};
+  for (std::size_t i = 0; i < target.size(); ++i) {
+    const std::size_t n = tree.knn(target[i], 10, idx.data(), d2.data());
+    if (n < 10 || d2[9] > 1.0F) continue;
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < n; ++k) mean += target[idx[k]].cast<double>();
+    mean /= static_cast<double>(n);
+    Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+    for (std::size_t k = 0; k < n; ++k) {
+      const Eigen::Vector3d d = target[idx[k]].cast<double>() - mean;
+      C += d * d.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+    normals[i] = es.eigenvectors().col(0);
+    planar[i] = es.eigenvalues()(0) < 0.05 * es.eigenvalues()(1);
+  }
+  for (int it = 0; it < 40; ++it) {
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    for (const auto& p : source) {
+      const Eigen::Vector3d q = T * p.cast<double>();
+      std::uint32_t j = 0;
+      float dj = 0.0F;
+      if (tree.knn(q.cast<float>(), 1, &j, &dj) != 1 || dj > 0.25F || !planar[j]) continue;
+      const Eigen::Vector3d& n = normals[j];
+      const double r = n.dot(q - target[j].cast<double>());
+      Eigen::Matrix<double, 6, 1> J;  // left perturbation [t; w]: d(q)/dw = -q^
+      J.head<3>() = n;
+      J.tail<3>() = q.cross(n);
+      H += J * J.transpose();
+      b += J * r;
+    }
+    const Eigen::Matrix<double, 6, 1> dx = H.ldlt().solve(-b);
+    T = SE3d(SO3d::exp(dx.tail<3>()), dx.head<3>()) * T;
+    if (dx.norm() < 1e-7) break;
+  }
+  return T;
+}
+
+std::vector<Eigen::Vector3f> downsample(const Scan& s, double leaf) {
+  VoxelGrid grid(VoxelGridConfig{.leaf_size_m = leaf, .point = VoxelPoint::kCentroid});
+  std::vector<Eigen::Vector3f> pts;
+  std::vector<Class> labels;
+  std::vector<std::uint32_t> first;
+  grid.downsample(s.points, s.labels, pts, labels, first);
+  return pts;
+}
+
+// Points where rays of a 64-beam sensor at the origin hit a set of planes
+// (n, d): n.x + d = 0; rings filled, nearest hit per ray within 80 m.
+Scan cast_planes(const std::vector<std::pair<Eigen::Vector3d, double>>& planes) {
+  const SensorModel sensor = SensorModel::hdl64e();
+  Scan s;
+  for (std::size_t ring = 0; ring < sensor.elevations_rad.size(); ++ring) {
+    const double el = sensor.elevations_rad[ring];
+    for (int a = 0; a < 900; ++a) {
+      const double az = 2.0 * std::numbers::pi * a / 900.0;
+      const Eigen::Vector3d dir(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+      double best = 80.0;
+      for (const auto& [n, d] : planes) {
+        const double den = n.dot(dir);
+        if (std::abs(den) < 1e-9) continue;
+        const double t = -d / den;
+        if (t > 0.5 && t < best) best = t;
+      }
+      if (best < 80.0) {
+        s.points.push_back((best * dir).cast<float>());
+        s.rings.push_back(static_cast<std::uint16_t>(ring));
+      }
+    }
+  }
+  return s;
+}
+
+template <typename A, typename R>
+void check_finite(const RegistrationResult& r) {
+  CHECK(r.T_target_source.matrix().allFinite());
+  CHECK(r.solve.hessian.allFinite());
+  CHECK(r.solve.eigenvalues.allFinite());
+  CHECK(std::isfinite(r.solve.final_cost));
+}
+
+}  // namespace
+
+TEST_CASE("Registration of the real 32-beam scan pair from identity", "[pipeline][registration]") {
+  const SE3d T_ref = read_matrix4(semlio_test::data_path("scan_pair/T_target_source.txt"));
+  RegistrationConfig config;
+  config.sensor = SensorModel::hdl32e();
+  for (const bool normal : {true, false}) {
+    Scan source = io::read_ply(semlio_test::data_path("scan_pair/source.ply"));
+    Scan target = io::read_ply(semlio_test::data_path("scan_pair/target.ply"));
+    const RegistrationResult r =
+        normal ? register_scan(source, target, SE3d(), NormalConsistency{}, kWeighted, config)
+               : register_scan(source, target, SE3d(), NearestK{}, kPlain, config);
+    INFO((normal ? "NormalConsistency" : "NearestK") << ": " << distance_m(r.T_target_source, T_ref) << " m, "
+                                                     << angle_deg(r.T_target_source, T_ref) << " deg");
+    REQUIRE(r.solve.ok());
+    // Issue #4: within 3 cm and 0.25 deg of the reference (itself an estimate).
+    CHECK(distance_m(r.T_target_source, T_ref) < 0.03);
+    CHECK(angle_deg(r.T_target_source, T_ref) < 0.25);
+    CHECK(r.inliers() > 1000);
+    CHECK(r.fitness() > 0.5);
+  }
+}
+
+TEST_CASE("Registration of two consecutive real KITTI scans agrees with an independent plane ICP",
+          "[pipeline][registration]") {
+  const auto path = [](int i) {
+    return semlio_test::data_path("kitti/sequences/00/velodyne/00000" + std::to_string(i) + ".bin");
+  };
+  const SE3d T_icp = [&] {
+    const Scan source = io::read_kitti_bin(path(1));
+    const Scan target = io::read_kitti_bin(path(0));
+    return plane_icp(downsample(source, 0.5), downsample(target, 0.2), SE3d());
+  }();
+  // ~0.69 m forward between these frames (data README); the ICP must see it.
+  REQUIRE(T_icp.translation().x() == Approx(0.69).margin(0.02));
+
+  SECTION("surface features agree with the ICP within 1.5 cm and 0.1 deg") {
+    Scan source = io::read_kitti_bin(path(1));
+    Scan target = io::read_kitti_bin(path(0));
+    RegistrationConfig config;
+    config.features.corner_threshold_m = 1e9;  // no corners
+    const RegistrationResult r = register_scan(source, target, SE3d(), NormalConsistency{}, kWeighted, config);
+    REQUIRE(r.solve.ok());
+    INFO("semlio " << r.T_target_source.translation().transpose() << " icp " << T_icp.translation().transpose());
+    CHECK(distance_m(r.T_target_source, T_icp) < 0.015);
+    CHECK(angle_deg(r.T_target_source, T_icp) < 0.1);
+  }
+  SECTION("the default (corners + surfaces) stays within 5 cm") {
+    // Known gap, reported in the README: LOAM corner features shorten the
+    // forward motion of this pair by 3-4 cm (0.654 m against 0.688 m) for every
+    // corner threshold, sector cap and linearity check tried; surfaces alone
+    // agree. This bound guards against regressions until that is resolved.
+    Scan source = io::read_kitti_bin(path(1));
+    Scan target = io::read_kitti_bin(path(0));
+    const RegistrationResult r = register_scan(source, target, SE3d(), NormalConsistency{}, kWeighted);
+    REQUIRE(r.solve.ok());
+    INFO("semlio " << r.T_target_source.translation().transpose() << " icp " << T_icp.translation().transpose());
+    CHECK(distance_m(r.T_target_source, T_icp) < 0.05);
+    CHECK(angle_deg(r.T_target_source, T_icp) < 0.1);
+  }
+}
+
+TEST_CASE("Degenerate registration inputs give a status and finite numbers", "[pipeline][registration]") {
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  SECTION("a flat plane: x, y and yaw unconstrained") {
+    Scan target = cast_planes({{up, 1.73}});
+    Scan source = target;
+    const auto r = register_scan(source, target, SE3d(), NormalConsistency{}, kWeighted);
+    check_finite<NormalConsistency, int>(r);
+    if (r.solve.ok()) CHECK(r.solve.degenerate_directions >= 3);
+  }
+  SECTION("a long corridor: motion along it is unconstrained") {
+    Scan target = cast_planes({{up, 1.73}, {Eigen::Vector3d::UnitY(), 3.0}, {-Eigen::Vector3d::UnitY(), 3.0}});
+    Scan source = target;
+    const auto r = register_scan(source, target, SE3d(), NearestK{}, kPlain);
+    check_finite<NearestK, int>(r);
+    if (r.solve.ok()) CHECK(r.solve.degenerate_directions >= 1);
+  }
+  SECTION("no features: an empty scan") {
+    Scan target = cast_planes({{up, 1.73}});
+    Scan source;
+    const auto r = register_scan(source, target, SE3d(), NormalConsistency{}, kWeighted);
+    check_finite<NormalConsistency, int>(r);
+    CHECK(r.solve.status == SolveStatus::kTooFewResiduals);
+    CHECK(r.source_corners + r.source_surfaces == 0);
+  }
+  SECTION("all points in one voxel") {
+    Scan one;
+    for (int i = 0; i < 200; ++i) {
+      one.points.emplace_back(10.0F + 0.001F * static_cast<float>(i % 7), 0.002F * static_cast<float>(i % 5), -1.0F);
+    }
+    Scan target = one;
+    const auto r = register_scan(one, target, SE3d(), NormalConsistency{}, kWeighted);
+    check_finite<NormalConsistency, int>(r);
+    CHECK_FALSE(r.solve.status == SolveStatus::kConverged);
+  }
+}
