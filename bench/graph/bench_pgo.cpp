@@ -21,7 +21,7 @@ void solve(benchmark::State& state, const Graph& initial, std::size_t edges) {
     state.PauseTiming();
     Graph graph = initial;
     state.ResumeTiming();
-    const semlio::SolveReport r = graph.optimize();
+    const semlio::GraphSolveReport r = graph.optimize();
     chi2 = r.final_chi2;
     iterations = r.iterations;
   }
@@ -60,7 +60,7 @@ void bench_window_update(benchmark::State& state) {
   std::size_t free_nodes = 0;
   for (auto _ : state) {
     grow();
-    const semlio::SolveReport r = graph.update();
+    const semlio::GraphSolveReport r = graph.update();
     free_nodes = r.free_nodes;
     benchmark::DoNotOptimize(r.final_chi2);
   }

@@ -205,7 +205,7 @@ template <typename Graph>
 Result semlio_solve(Graph graph) {
   const auto t0 = std::chrono::steady_clock::now();
   const double c0 = cpu_s();
-  const semlio::SolveReport report = graph.optimize();
+  const semlio::GraphSolveReport report = graph.optimize();
   Result r;
   r.cpu_seconds = cpu_s() - c0;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -31,7 +31,7 @@ template <typename Graph>
 int run(Graph graph, semlio::io::G2oGraph& file, const std::string& out_path) {
   const auto t0 = std::chrono::steady_clock::now();
   const std::clock_t c0 = std::clock();
-  const semlio::SolveReport report = graph.optimize();
+  const semlio::GraphSolveReport report = graph.optimize();
   const double cpu_s = static_cast<double>(std::clock() - c0) / static_cast<double>(CLOCKS_PER_SEC);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("initial chi2: %.12g\n", report.initial_chi2);

@@ -18,8 +18,8 @@ using semlio::PoseGraph2d;
 using semlio::PoseGraph3d;
 using semlio::RotationError;
 using semlio::SE3d;
-using semlio::SolveMode;
-using semlio::SolveStatus;
+using semlio::GraphSolveMode;
+using semlio::GraphSolveStatus;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 
@@ -44,8 +44,8 @@ SE3d perturbed(const SE3d& T, std::mt19937& rng, double sigma_t, double sigma_r)
 // chi2 of a benchmark file solved from its initial guess.
 template <typename Graph>
 double solve_chi2(Graph graph) {
-  const semlio::SolveReport r = graph.optimize();
-  CHECK(r.status == SolveStatus::converged);
+  const semlio::GraphSolveReport r = graph.optimize();
+  CHECK(r.status == GraphSolveStatus::converged);
   CHECK(std::abs(graph.chi2() - r.final_chi2) <= 1e-9 * r.final_chi2);
   return r.final_chi2;
 }
@@ -190,8 +190,8 @@ TEST_CASE("a node without factors makes the system singular: a status, no NaN", 
   const auto b = graph.add_node(SE3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1.0, 0.0, 0.0)));
   const auto c = graph.add_node(SE3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(5.0, 1.0, 0.0)));
   graph.add_between(a, b, SE3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1.1, 0.0, 0.0)), Matrix6::Identity());
-  const semlio::SolveReport r = graph.optimize();
-  CHECK(r.status == SolveStatus::singular);
+  const semlio::GraphSolveReport r = graph.optimize();
+  CHECK(r.status == GraphSolveStatus::singular);
   CHECK_FALSE(r.ok());
   CHECK(r.degenerate_node == static_cast<long>(c));
   // Estimates unchanged and finite.
@@ -199,8 +199,8 @@ TEST_CASE("a node without factors makes the system singular: a status, no NaN", 
   CHECK(graph.pose(c).translation().allFinite());
   // Constraining the node makes it solvable.
   graph.add_between(b, c, SE3d(), Matrix6::Identity());
-  const semlio::SolveReport r2 = graph.optimize();
-  CHECK(r2.status == SolveStatus::converged);
+  const semlio::GraphSolveReport r2 = graph.optimize();
+  CHECK(r2.status == GraphSolveStatus::converged);
   CHECK(graph.pose(c).translation().isApprox(Eigen::Vector3d(1.1, 0.0, 0.0), 1e-9));
 }
 
@@ -211,8 +211,8 @@ TEST_CASE("rank-deficient information gives a singular status", "[graph]") {
   Matrix6 info = Matrix6::Identity();
   info.bottomRightCorner<3, 3>().setZero();  // rotation unobserved
   graph.add_between(0, 1, SE3d(), info);
-  const semlio::SolveReport r = graph.optimize();
-  CHECK(r.status == SolveStatus::singular);
+  const semlio::GraphSolveReport r = graph.optimize();
+  CHECK(r.status == GraphSolveStatus::singular);
   CHECK(r.degenerate_node == 1);
   CHECK(graph.pose(1).so3().quaternion().coeffs().allFinite());
 }
@@ -224,8 +224,8 @@ TEST_CASE("an indefinite information matrix given directly gives a singular stat
   Matrix6 info = Matrix6::Identity();
   info(4, 4) = -1.0;  // the g2o reader would have projected this to PSD
   graph.add_between(0, 1, SE3d(), info);
-  const semlio::SolveReport r = graph.optimize();
-  CHECK(r.status == SolveStatus::singular);
+  const semlio::GraphSolveReport r = graph.optimize();
+  CHECK(r.status == GraphSolveStatus::singular);
   CHECK(graph.pose(1).translation().x() == 0.5);
 }
 
@@ -242,8 +242,8 @@ TEST_CASE("bad input throws; non-finite estimates give a status", "[graph]") {
   graph.add_between(0, 1, SE3d(), Matrix6::Identity());
   graph.set_pose(
       1, SE3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(std::numeric_limits<double>::infinity(), 0.0, 0.0)));
-  const semlio::SolveReport r = graph.optimize();
-  CHECK(r.status == SolveStatus::non_finite);
+  const semlio::GraphSolveReport r = graph.optimize();
+  CHECK(r.status == GraphSolveStatus::non_finite);
 }
 
 TEST_CASE("a prior replaces the fixed first node as gauge", "[graph]") {
@@ -258,8 +258,8 @@ TEST_CASE("a prior replaces the fixed first node as gauge", "[graph]") {
   CHECK_FALSE(graph.is_fixed(0));
   graph.add_prior(0, prior, 100.0 * Matrix6::Identity());
   graph.add_between(0, 1, step, Matrix6::Identity());
-  const semlio::SolveReport r = graph.optimize();
-  REQUIRE(r.status == SolveStatus::converged);
+  const semlio::GraphSolveReport r = graph.optimize();
+  REQUIRE(r.status == GraphSolveStatus::converged);
   CHECK(r.final_chi2 < 1e-16);
   CHECK((graph.pose(0).inverse() * prior).log().norm() < 1e-9);
   CHECK(((prior * step).inverse() * graph.pose(1)).log().norm() < 1e-9);
@@ -291,26 +291,26 @@ TEST_CASE("incremental window updates then a final full solve agree with a batch
       inc.add_loop(from, static_cast<semlio::NodeId>(k), Z, info, false);
       batch.add_loop(from, static_cast<semlio::NodeId>(k), Z, info, false);
     }
-    const semlio::SolveReport r = inc.update();
+    const semlio::GraphSolveReport r = inc.update();
     REQUIRE(r.ok());
     if (k > config.window_size && !loop) {
-      CHECK(r.mode == SolveMode::window);
+      CHECK(r.mode == GraphSolveMode::window);
       CHECK(r.free_nodes == config.window_size);
       CHECK(r.active_factors <= config.window_size + 1);  // window cost, not graph size
       saw_window = true;
     }
     if (loop) {
-      CHECK(r.mode == SolveMode::full);
+      CHECK(r.mode == GraphSolveMode::full);
       CHECK(r.free_nodes == k);
       saw_loop_full = true;
     }
   }
   CHECK(saw_window);
   CHECK(saw_loop_full);
-  const semlio::SolveReport ri = inc.optimize();
-  const semlio::SolveReport rb = batch.optimize();
-  REQUIRE(ri.status == SolveStatus::converged);
-  REQUIRE(rb.status == SolveStatus::converged);
+  const semlio::GraphSolveReport ri = inc.optimize();
+  const semlio::GraphSolveReport rb = batch.optimize();
+  REQUIRE(ri.status == GraphSolveStatus::converged);
+  REQUIRE(rb.status == GraphSolveStatus::converged);
   CHECK(ri.final_chi2 == Approx(rb.final_chi2).epsilon(1e-8));
   double max_diff = 0.0;
   for (semlio::NodeId k = 0; k < inc.num_nodes(); ++k) {
@@ -330,7 +330,7 @@ TEST_CASE("a loop closure triggers a warm-started full re-solve", "[graph]") {
   for (std::size_t k = 1; k < d.truth.size(); ++k) {
     graph.add_node(graph.pose(static_cast<semlio::NodeId>(k - 1)) * d.odometry[k - 1]);
     graph.add_between(static_cast<semlio::NodeId>(k - 1), static_cast<semlio::NodeId>(k), d.odometry[k - 1], info);
-    REQUIRE(graph.update().mode == (k + 1 <= config.window_size ? SolveMode::full : SolveMode::window));
+    REQUIRE(graph.update().mode == (k + 1 <= config.window_size ? GraphSolveMode::full : GraphSolveMode::window));
   }
   const auto last = static_cast<semlio::NodeId>(d.truth.size() - 1);
   const SE3d Z = perturbed(d.truth[0].inverse() * d.truth[last], rng, 0.01, 0.002);
@@ -339,15 +339,15 @@ TEST_CASE("a loop closure triggers a warm-started full re-solve", "[graph]") {
   PoseGraph3d cold = graph;  // same graph; re-solved from the odometry chain below
   for (semlio::NodeId k = 1; k <= last; ++k) cold.set_pose(k, cold.pose(k - 1) * d.odometry[k - 1]);
   const double drift_before = (graph.pose(last).inverse() * d.truth[last]).log().norm();
-  const semlio::SolveReport r = graph.update();
-  REQUIRE(r.status == SolveStatus::converged);
-  CHECK(r.mode == SolveMode::full);
+  const semlio::GraphSolveReport r = graph.update();
+  REQUIRE(r.status == GraphSolveStatus::converged);
+  CHECK(r.mode == GraphSolveMode::full);
   CHECK(r.free_nodes == d.truth.size() - 1);
   CHECK_FALSE(graph.full_solve_pending());
   // Warm start: the solve starts from the current estimate (its initial chi2
   // is the graph's chi2 before the update, loop factor included).
-  const semlio::SolveReport rc = cold.optimize();
-  REQUIRE(rc.status == SolveStatus::converged);
+  const semlio::GraphSolveReport rc = cold.optimize();
+  REQUIRE(rc.status == GraphSolveStatus::converged);
   CHECK(r.final_chi2 == Approx(rc.final_chi2).epsilon(1e-6));
   CHECK(r.iterations <= rc.iterations + 1);
   const double drift_after = (graph.pose(last).inverse() * d.truth[last]).log().norm();
@@ -355,7 +355,7 @@ TEST_CASE("a loop closure triggers a warm-started full re-solve", "[graph]") {
   // The next update without a loop is a window update again.
   graph.add_node(graph.pose(last));
   graph.add_between(last, last + 1, SE3d(), info);
-  CHECK(graph.update().mode == SolveMode::window);
+  CHECK(graph.update().mode == GraphSolveMode::window);
 }
 
 TEST_CASE("a robust loop closure limits the damage of an outlier", "[graph]") {
@@ -414,13 +414,13 @@ TEST_CASE("the optional trace records every LM iteration with non-increasing chi
   semlio::PoseGraphConfig config;
   config.record_trace = true;
   PoseGraph3d graph = semlio::io::make_pose_graph3(file, config);
-  const semlio::SolveReport r = graph.optimize();
-  REQUIRE(r.status == SolveStatus::converged);
+  const semlio::GraphSolveReport r = graph.optimize();
+  REQUIRE(r.status == GraphSolveStatus::converged);
   REQUIRE(!r.trace.empty());
   CHECK(r.trace.size() <= static_cast<std::size_t>(r.iterations));
   CHECK(r.trace.front().lambda == 0.0);  // the first step is Gauss-Newton
   double previous = r.initial_chi2;
-  for (const semlio::SolveIteration& it : r.trace) {
+  for (const semlio::GraphSolveIteration& it : r.trace) {
     CHECK(it.chi2 <= previous * (1.0 + 1e-12));
     previous = it.chi2;
   }

@@ -148,8 +148,8 @@ TEST_CASE("g2o: a repaired graph still solves, with the repair visible in the co
   const G2oGraph g = read_g2o(f.path.string());
   CHECK(g.repaired_information == 1);
   semlio::PoseGraph3d graph = semlio::io::make_pose_graph3(g);
-  const semlio::SolveReport r = graph.optimize();
-  CHECK(r.status == semlio::SolveStatus::converged);
+  const semlio::GraphSolveReport r = graph.optimize();
+  CHECK(r.status == semlio::GraphSolveStatus::converged);
   CHECK(r.final_chi2 < 1e-16);
 }
 
@@ -182,7 +182,7 @@ TEST_CASE("g2o: FIX lines choose the gauge; other tags are skipped and counted",
   semlio::PoseGraph2d graph = semlio::io::make_pose_graph2(g);
   CHECK_FALSE(graph.is_fixed(0));
   CHECK(graph.is_fixed(2));
-  REQUIRE(graph.optimize().status == semlio::SolveStatus::converged);
+  REQUIRE(graph.optimize().status == semlio::GraphSolveStatus::converged);
   CHECK(graph.pose(2).translation().x() == 2.0);  // held
   CHECK(graph.pose(0).translation().x() == Approx(0.0).margin(1e-9));
   // The solution written back and re-read keeps the FIX line.

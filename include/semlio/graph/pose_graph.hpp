@@ -61,12 +61,12 @@ struct PoseGraphConfig {
   double huber_delta = 4.0;             ///< robust loops: Huber threshold on sqrt(e^T Omega e)
   double singular_pivot_ratio = 1e-14;  ///< LDL^T pivot / max pivot below this = singular
   bool fix_first_node = true;           ///< node 0 is held fixed (gauge)
-  bool record_trace = false;            ///< fill SolveReport::trace (one entry per LM iteration)
+  bool record_trace = false;            ///< fill GraphSolveReport::trace (one entry per LM iteration)
   ErrorConvention convention{};         ///< between-error convention (between_error.hpp)
 };
 
 /// How a solve ended.
-enum class SolveStatus {
+enum class GraphSolveStatus {
   converged,         ///< a tolerance was met
   max_iterations,    ///< iteration limit reached (estimate improved but not converged)
   singular,          ///< the reduced system is singular; estimate unchanged
@@ -75,13 +75,13 @@ enum class SolveStatus {
 };
 
 /// Which unknowns a solve had.
-enum class SolveMode {
+enum class GraphSolveMode {
   window,  ///< the newest window_size nodes (incremental update)
   full,    ///< every non-fixed node
 };
 
 /// One LM iteration of a solve (optional trace).
-struct SolveIteration {
+struct GraphSolveIteration {
   double chi2 = 0.0;       ///< sum e^T Omega e after the iteration
   double lambda = 0.0;     ///< damping used (0 = Gauss-Newton)
   double step_norm = 0.0;  ///< |dx| of the proposed step
@@ -89,35 +89,35 @@ struct SolveIteration {
 };
 
 /// Result of update() / optimize().
-struct SolveReport {
-  SolveStatus status = SolveStatus::nothing_to_solve;  ///< outcome
-  SolveMode mode = SolveMode::full;                    ///< window or full
+struct GraphSolveReport {
+  GraphSolveStatus status = GraphSolveStatus::nothing_to_solve;  ///< outcome
+  GraphSolveMode mode = GraphSolveMode::full;                    ///< window or full
   int iterations = 0;                                  ///< LM iterations (accepted and rejected steps)
   double initial_chi2 = 0.0;                           ///< sum e^T Omega e over the solved factors, before
   double final_chi2 = 0.0;                             ///< the same after
   std::size_t free_nodes = 0;                          ///< unknown nodes
   std::size_t active_factors = 0;                      ///< factors linearised
   long degenerate_node = -1;                           ///< when singular: a node on the singular pivot (best effort)
-  std::vector<SolveIteration> trace;                   ///< per-iteration trace when PoseGraphConfig::record_trace
+  std::vector<GraphSolveIteration> trace;                   ///< per-iteration trace when PoseGraphConfig::record_trace
   /// True when the estimate is usable (converged or iteration limit).
   [[nodiscard]] bool ok() const {
-    return status == SolveStatus::converged || status == SolveStatus::max_iterations ||
-           status == SolveStatus::nothing_to_solve;
+    return status == GraphSolveStatus::converged || status == GraphSolveStatus::max_iterations ||
+           status == GraphSolveStatus::nothing_to_solve;
   }
 };
 
 /// Readable name of a status.
-inline const char* to_string(SolveStatus s) {
+inline const char* to_string(GraphSolveStatus s) {
   switch (s) {
-    case SolveStatus::converged:
+    case GraphSolveStatus::converged:
       return "converged";
-    case SolveStatus::max_iterations:
+    case GraphSolveStatus::max_iterations:
       return "max_iterations";
-    case SolveStatus::singular:
+    case GraphSolveStatus::singular:
       return "singular";
-    case SolveStatus::non_finite:
+    case GraphSolveStatus::non_finite:
       return "non_finite";
-    case SolveStatus::nothing_to_solve:
+    case GraphSolveStatus::nothing_to_solve:
       return "nothing_to_solve";
   }
   return "?";
@@ -194,10 +194,10 @@ class PoseGraph {
 
   /// Incremental solve: window of the newest nodes, or a warm-started full
   /// solve after a loop closure (see the file comment).
-  SolveReport update() {
+  GraphSolveReport update() {
     const std::size_t n = poses_.size();
     if (pending_full_ || n <= config_.window_size) {
-      SolveReport report = optimize();
+      GraphSolveReport report = optimize();
       return report;
     }
     free_.clear();
@@ -208,24 +208,24 @@ class PoseGraph {
     for (const NodeId node : free_) active_.insert(active_.end(), adjacent_[node].begin(), adjacent_[node].end());
     std::sort(active_.begin(), active_.end());
     active_.erase(std::unique(active_.begin(), active_.end()), active_.end());
-    SolveReport report = solve(config_.window_iterations);
-    report.mode = SolveMode::window;
+    GraphSolveReport report = solve(config_.window_iterations);
+    report.mode = GraphSolveMode::window;
     return report;
   }
 
   /// Full solve of every non-fixed node, warm-started from the current estimate.
-  SolveReport optimize() { return optimize(config_.max_iterations); }
+  GraphSolveReport optimize() { return optimize(config_.max_iterations); }
 
   /// Full solve with an explicit iteration limit.
-  SolveReport optimize(int max_iterations) {
+  GraphSolveReport optimize(int max_iterations) {
     free_.clear();
     for (std::size_t k = 0; k < poses_.size(); ++k) {
       if (fixed_[k] == 0) free_.push_back(static_cast<NodeId>(k));
     }
     active_.resize(factors_.size());
     for (std::size_t f = 0; f < factors_.size(); ++f) active_[f] = static_cast<std::uint32_t>(f);
-    SolveReport report = solve(max_iterations);
-    report.mode = SolveMode::full;
+    GraphSolveReport report = solve(max_iterations);
+    report.mode = GraphSolveMode::full;
     if (report.ok()) pending_full_ = false;
     return report;
   }
@@ -400,8 +400,8 @@ class PoseGraph {
     return g.allFinite();
   }
 
-  SolveReport solve(int max_iterations) {
-    SolveReport report;
+  GraphSolveReport solve(int max_iterations) {
+    GraphSolveReport report;
     report.free_nodes = free_.size();
     report.active_factors = active_.size();
     for (std::size_t l = 0; l < free_.size(); ++l) local_[free_[l]] = static_cast<int>(l);
@@ -411,17 +411,17 @@ class PoseGraph {
     return report;
   }
 
-  void run(int max_iterations, SolveReport& report) {
+  void run(int max_iterations, GraphSolveReport& report) {
     double cost = 0.0;
     double chi2 = 0.0;
     if (!evaluate(false, cost, chi2)) {
-      report.status = SolveStatus::non_finite;
+      report.status = GraphSolveStatus::non_finite;
       return;
     }
     report.initial_chi2 = chi2;
     report.final_chi2 = chi2;
     if (free_.empty()) {
-      report.status = SolveStatus::nothing_to_solve;
+      report.status = GraphSolveStatus::nothing_to_solve;
       return;
     }
     build_pattern();
@@ -430,11 +430,11 @@ class PoseGraph {
     double nu = 2.0;
     bool relinearize = true;
     Eigen::VectorXd dx;
-    report.status = SolveStatus::max_iterations;
+    report.status = GraphSolveStatus::max_iterations;
     for (int it = 0; it < max_iterations; ++it) {
       if (relinearize) {
         if (!linearize()) {
-          report.status = SolveStatus::non_finite;
+          report.status = GraphSolveStatus::non_finite;
           return;
         }
         relinearize = false;
@@ -442,7 +442,7 @@ class PoseGraph {
       Eigen::Index bad_row = -1;
       const detail::FactorStatus fs = system_.factorize(lambda, config_.singular_pivot_ratio, &bad_row);
       if (fs == detail::FactorStatus::singular) {
-        report.status = SolveStatus::singular;
+        report.status = GraphSolveStatus::singular;
         if (bad_row >= 0) report.degenerate_node = static_cast<long>(free_[static_cast<std::size_t>(bad_row / kDim)]);
         return;
       }
@@ -457,11 +457,11 @@ class PoseGraph {
       const double predicted = -(g.dot(dx) + 0.5 * system_.quadratic(dx));  // decrease of F
       const double F = 0.5 * cost;
       if (!dx.allFinite()) {
-        report.status = SolveStatus::non_finite;
+        report.status = GraphSolveStatus::non_finite;
         return;
       }
       if (!(predicted > 0.0)) {
-        report.status = SolveStatus::converged;
+        report.status = GraphSolveStatus::converged;
         break;
       }
       // A step that predicts a negligible decrease is still taken when it
@@ -490,7 +490,7 @@ class PoseGraph {
           cost = new_cost;
           report.final_chi2 = new_chi2;
         }
-        report.status = SolveStatus::converged;
+        report.status = GraphSolveStatus::converged;
         break;
       }
       if (finite && rho > 0.0) {
@@ -504,14 +504,14 @@ class PoseGraph {
         lambda = lambda == 0.0 ? config_.initial_lambda : lambda * std::max(1.0 / 3.0, 1.0 - t * t * t);
         nu = 2.0;
         if (rel < config_.function_tolerance || std::sqrt(x_norm2) < config_.step_tolerance || cost == 0.0) {
-          report.status = SolveStatus::converged;
+          report.status = GraphSolveStatus::converged;
           break;
         }
       } else {
         lambda = lambda == 0.0 ? config_.initial_lambda : lambda * nu;
         nu *= 2.0;
         if (lambda > 1e32) {
-          report.status = SolveStatus::converged;  // no decrease possible at numerical precision
+          report.status = GraphSolveStatus::converged;  // no decrease possible at numerical precision
           break;
         }
       }

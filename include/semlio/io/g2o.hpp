@@ -34,6 +34,7 @@
 #include <vector>
 
 #include <semlio/core/error.hpp>
+#include <semlio/io/detail/text.hpp>
 #include <semlio/graph/pose2.hpp>
 #include <semlio/lie/se3.hpp>
 
@@ -116,18 +117,6 @@ PsdCheck project_to_psd(Eigen::Matrix<double, N, N>& M) {
 }
 
 namespace detail {
-
-inline std::vector<std::string_view> split_ws(std::string_view s) {
-  std::vector<std::string_view> out;
-  std::size_t i = 0;
-  while (i < s.size()) {
-    while (i < s.size() && (s[i] == ' ' || s[i] == '\t' || s[i] == '\r')) ++i;
-    const std::size_t b = i;
-    while (i < s.size() && s[i] != ' ' && s[i] != '\t' && s[i] != '\r') ++i;
-    if (i > b) out.push_back(s.substr(b, i - b));
-  }
-  return out;
-}
 
 struct G2oLine {
   const std::string& path;

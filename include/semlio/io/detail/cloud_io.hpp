@@ -26,19 +26,10 @@
 
 namespace semlio::io::detail::cloud {
 
-/// "path:line: what", the same text as semlio::detail::where. Built with
-/// appends only: GCC 12 at -O3 raises a false -Wrestrict warning inside
-/// where()'s `":" + std::to_string(line)`, which breaks -Werror builds of
-/// every translation unit that reads a PCD/PLY file.
+/// "path:line: what": semlio::detail::where under the short name the PCD/PLY
+/// readers use.
 inline std::string located(const std::string& path, long line, const std::string& what) {
-  std::string out = path;
-  if (line > 0) {
-    out += ':';
-    out += std::to_string(line);
-  }
-  out += ": ";
-  out += what;
-  return out;
+  return semlio::detail::where(path, line, what);
 }
 
 /// Kind of a stored scalar.
