@@ -13,7 +13,7 @@ IN=${1:?usage: scripts/kitti_raw_consistency.sh PCD_DIR [baseline|full]}
 PRESET=${2:-full}
 BUILD_DIR=${BUILD_DIR:-build}
 OUT=results/kitti_raw_consistency
-scripts/install_deps.sh
+scripts/install_deps.sh python3-numpy
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
 cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_convert semlio_kitti
 rm -rf "$OUT" && mkdir -p "$OUT/fwd/velodyne" "$OUT/bwd/velodyne"

@@ -260,15 +260,7 @@ inline void write_kitti_calib(const std::string& path, const Calibration& calib)
 inline std::vector<double> read_kitti_times(const std::string& path) {
   const std::string text = detail::read_file(path);
   std::vector<double> times;
-  std::vector<std::string_view> tok;
-  long blank_line = 0;
-  detail::for_each_line(text, [&](long line, std::string_view s) {
-    detail::split_ws(s, tok);
-    if (tok.empty()) {
-      if (blank_line == 0) blank_line = line;
-      return;
-    }
-    if (blank_line != 0) throw FormatError(detail::where(path, blank_line, "blank line between times"));
+  detail::for_each_record(text, path, "times", [&](long line, std::string_view, const auto& tok) {
     if (tok.size() != 1) {
       throw FormatError(
           detail::where(path, line, "times line has " + std::to_string(tok.size()) + " fields, expected 1"));

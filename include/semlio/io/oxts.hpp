@@ -244,13 +244,7 @@ inline std::vector<OxtsRecord> read_oxts(const std::string& oxts_dir) {
   const std::string stamps_path = (fs::path(oxts_dir) / "timestamps.txt").string();
   const std::string text = detail::read_file(stamps_path);
   std::vector<OxtsRecord> records;
-  long blank_line = 0;
-  detail::for_each_line(text, [&](long line, std::string_view s) {
-    if (detail::is_blank(s)) {
-      if (blank_line == 0) blank_line = line;
-      return;
-    }
-    if (blank_line != 0) throw FormatError(detail::where(stamps_path, blank_line, "blank line between timestamps"));
+  detail::for_each_record(text, stamps_path, "timestamps", [&](long line, std::string_view s, const auto&) {
     OxtsRecord rec;
     rec.stamp_s = parse_oxts_timestamp(s, stamps_path, line);
     if (!records.empty() && rec.stamp_s < records.back().stamp_s) {

@@ -34,17 +34,7 @@ namespace semlio::io {
 inline std::vector<SE3d> read_kitti_poses(const std::string& path) {
   const std::string text = detail::read_file(path);
   std::vector<SE3d> poses;
-  std::vector<std::string_view> tok;
-  long blank_line = 0;
-  detail::for_each_line(text, [&](long line, std::string_view s) {
-    detail::split_ws(s, tok);
-    if (tok.empty()) {
-      if (blank_line == 0) blank_line = line;
-      return;
-    }
-    if (blank_line != 0) {
-      throw FormatError(detail::where(path, blank_line, "blank line between poses"));
-    }
+  detail::for_each_record(text, path, "poses", [&](long line, std::string_view, const auto& tok) {
     if (tok.size() != 12) {
       throw FormatError(
           detail::where(path, line, "pose line has " + std::to_string(tok.size()) + " fields, expected 12"));

@@ -101,6 +101,28 @@ inline void split_ws(std::string_view line, std::vector<std::string_view>& out) 
   }
 }
 
+/// Calls f(line_number, line, tokens) for every record line of `text`: the
+/// whitespace-separated tokens of each non-blank line. Trailing blank lines
+/// are allowed; a blank line followed by another record throws FormatError
+/// naming `path`, the blank line and `records` ("poses", "times", ...). The one
+/// home of that rule for every line-oriented reader.
+template <typename F>
+void for_each_record(std::string_view text, const std::string& path, std::string_view records, F&& f) {
+  std::vector<std::string_view> tokens;
+  long blank_line = 0;
+  for_each_line(text, [&](long line, std::string_view s) {
+    split_ws(s, tokens);
+    if (tokens.empty()) {
+      if (blank_line == 0) blank_line = line;
+      return;
+    }
+    if (blank_line != 0) {
+      throw FormatError(where(path, blank_line, "blank line between " + std::string(records)));
+    }
+    f(line, s, tokens);
+  });
+}
+
 /// Splits at runs of whitespace (allocating convenience form).
 inline std::vector<std::string_view> split_ws(std::string_view line) {
   std::vector<std::string_view> out;
