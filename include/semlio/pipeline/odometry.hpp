@@ -134,8 +134,11 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
   }
 
   /// Processes one scan (sensor frame, stamp in scan.stamp_s) and returns the
-  /// report. The scan is consumed as a working buffer.
-  FrameReport process(Scan& scan) {
+  /// report. The scan is consumed as a working buffer: afterwards it holds the
+  /// preprocessed, segmented points in the lidar frame (what a back end keeps
+  /// for its map). `T_map_lidar_prior`, when given (e.g. from IMU
+  /// preintegration), replaces the constant-velocity prediction.
+  FrameReport process(Scan& scan, const std::optional<SE3d>& T_map_lidar_prior = std::nullopt) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
     auto ms_since = [](Clock::time_point a) {
@@ -152,7 +155,9 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
       report.timings.total_ms = ms_since(t0);
       return report;
     }
-    const SE3d T_pred = predict(scan.stamp_s);
+    const SE3d T_pred = T_map_lidar_prior && T_map_lidar_prior->matrix().allFinite()
+                            ? *T_map_lidar_prior
+                            : predict(scan.stamp_s);
     report.T_map_lidar = T_pred;
     if (processed_ > 0 && config_.min_frame_interval_s > 0.0 &&
         scan.stamp_s - last_stamp_s_ < config_.min_frame_interval_s) {
@@ -266,6 +271,8 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
   [[nodiscard]] std::size_t keyframe_count() const noexcept { return map_.keyframe_count(); }
   /// The local map (keyframes and the maps of the last build).
   [[nodiscard]] const LocalMap& local_map() const noexcept { return map_; }
+  /// Features of the last processed frame (lidar frame; corners and surfaces).
+  [[nodiscard]] const LoamFeatures& features() const noexcept { return features_; }
   /// Latest pose of the lidar in the map frame.
   [[nodiscard]] const SE3d& pose() const noexcept { return T_last_; }
   /// The settings.
