@@ -1,0 +1,2 @@
+# Loop closure: candidate detectors and verification.
+set(SEMLIO_TESTS_loop_loop)

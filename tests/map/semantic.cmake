@@ -1,0 +1,2 @@
+# Global semantic map.
+set(SEMLIO_TESTS_map_semantic)

@@ -1,0 +1,2 @@
+# Deskew wired into the pipeline (KITTI raw, distorted simulated sweeps).
+set(SEMLIO_TESTS_pipeline_deskew)

@@ -1,0 +1,2 @@
+# Slam<...>: odometry + pose graph + loops.
+set(SEMLIO_TESTS_pipeline_slam)

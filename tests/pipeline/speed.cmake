@@ -1,0 +1,2 @@
+# Speed work: incremental local map, allocation-free frames.
+set(SEMLIO_TESTS_pipeline_speed)
