@@ -6,7 +6,14 @@
 //                   [--imu-rate-hz R] [--label-quality MIOU] [--threads T] --out DIR
 // Defaults: urban, light, 1000 frames, seed 1, distortion off, 100 Hz, 0.5,
 // threads = hardware concurrency (the output does not depend on it).
+// --revisit: the drive comes back to its start: the last frame is taken at
+// the first frame's pose, heading the same way, for any N >= ~100 frames
+// (urban/aliased: a block loop with stops, or for drives shorter than ~70 s
+// an out-and-back along one street with U-turns; rural: out-and-back with
+// U-turns on paved turnarounds; highway: out-and-back in the inner lanes with
+// U-turns through median crossings).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -24,7 +31,15 @@ void usage() {
   std::fprintf(stderr,
                "usage: semlio_simulate [--world urban|rural|highway|aliased] [--traffic none|light|heavy]\n"
                "                       [--frames N] [--seed S] [--revisit] [--distortion on|off]\n"
-               "                       [--imu-rate-hz R] [--label-quality MIOU] [--threads T] --out DIR\n");
+               "                       [--imu-rate-hz R] [--label-quality MIOU] [--threads T] --out DIR\n"
+               "defaults: urban, light traffic, 1000 frames, seed 1, distortion off, 100 Hz IMU, label quality 0.5\n"
+               "--revisit: plan the route so that the last frame is taken at the first frame's pose (same\n"
+               "           heading, passing at speed), for any drive of >= ~100 frames: urban/aliased drive\n"
+               "           a block loop (stops fitted to the drive) or, when shorter than a block loop\n"
+               "           (< ~700 frames), out and back along one street with U-turns; rural drives out\n"
+               "           and back with U-turns on paved turnarounds; highway out and back in the inner\n"
+               "           lanes with U-turns through median crossings. Without it, drives shorter than\n"
+               "           ~1500 frames (urban) never come back to their start.\n");
 }
 
 double parse_number(std::string_view flag, const std::string& text) {
@@ -91,6 +106,11 @@ int main(int argc, char** argv) {
     if (out.empty()) throw semlio::ConfigError("--out DIR is required");
     const auto t0 = std::chrono::steady_clock::now();
     const semlio::sim::Simulator sim(cfg);
+    if (cfg.revisit && std::abs(sim.world().return_error_m) > 1.0) {
+      std::fprintf(stderr, "semlio_simulate: warning: --revisit: %zu frames are too short to come back; the drive "
+                   "ends %.1f m (of path) from its start (needs ~100 frames or more)\n",
+                   cfg.frames, std::abs(sim.world().return_error_m));
+    }
     wc.logger = [](semlio::LogLevel, std::string_view msg) {
       std::fprintf(stderr, "%.*s\n", static_cast<int>(msg.size()), msg.data());
     };

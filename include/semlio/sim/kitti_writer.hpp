@@ -149,7 +149,10 @@ inline std::vector<io::OxtsRecord> oxts_records(const Trajectory& ego, const SE3
 /// far_dropout_start_m, noise), time_reference ("sweep_start"),
 /// point_frame ("lidar_at_sweep_start" or "lidar_at_point_time"),
 /// T_imu_lidar (12 numbers, row-major 3x4), imu_noise, route_length_m,
-/// loop_length_m (0 for open routes), ego_duration_s, actors, points.
+/// loop_length_m (one lap of a revisit route; 0 for open routes),
+/// revisit_route ("none", "block_loop" or "out_and_back"), return_time_s
+/// (revisit: when the ego is back at its start, the last frame's stamp; 0 for
+/// open routes), ego_duration_s, actors, points.
 inline std::string sim_json(const Simulator& sim, const KittiWriterConfig& wc, const KittiWriteReport& rep) {
   const SimulatorConfig& c = sim.config();
   const LidarConfig& l = c.lidar;
@@ -217,6 +220,8 @@ inline std::string sim_json(const Simulator& sim, const KittiWriterConfig& wc, c
   j += "],\n";
   num("route_length_m", sim.ego().length_m());
   num("loop_length_m", sim.world().loop_length_m);
+  str("revisit_route", sim.world().revisit_route.empty() ? "none" : sim.world().revisit_route);
+  num("return_time_s", sim.world().return_time_s);
   num("ego_duration_s", sim.ego().duration_s());
   num("actors", static_cast<double>(sim.traffic().actors().size()));
   j += "  \"points\": ";

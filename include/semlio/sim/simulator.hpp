@@ -39,6 +39,7 @@
 #include <semlio/sim/imu.hpp>
 #include <semlio/sim/lidar.hpp>
 #include <semlio/sim/random.hpp>
+#include <semlio/sim/revisit.hpp>
 #include <semlio/sim/traffic.hpp>
 #include <semlio/sim/trajectory.hpp>
 #include <semlio/sim/world.hpp>
@@ -55,7 +56,11 @@ struct SimulatorConfig {
   TrafficLevel traffic = TrafficLevel::kLight; ///< amount of traffic
   std::size_t frames = 1000;                   ///< number of sweeps
   std::uint64_t seed = 1;                      ///< seed of the world, traffic and noise
-  bool revisit = false;                        ///< route is a loop the drive closes (when long enough; see README)
+  /// Revisit: the route is a closed lap sized so that the last frame is taken
+  /// at the first frame's pose (urban: a block loop, or an out-and-back drive
+  /// with U-turns when no block loop is short enough; rural and highway:
+  /// out-and-back; see revisit.hpp). Needs frames >= ~100 (a 10 s drive).
+  bool revisit = false;
   bool distortion = false;                     ///< false: de-skewed (KITTI odometry); true: raw
   double imu_rate_hz = 100.0;                  ///< IMU sample rate (used by the writer) [Hz]
   double label_quality = 0.5;                  ///< target mIoU of predicted labels (used by the writer)
@@ -94,28 +99,25 @@ class Simulator {
       throw ConfigError("SimulatorConfig.label_quality must be in (0, 1], got " + std::to_string(config_.label_quality));
     }
     const double duration = static_cast<double>(config_.frames) * lidar_.period_s();
-    WorldConfig wc;
-    wc.kind = config_.world;
-    wc.seed = config_.seed;
-    wc.revisit = config_.revisit;
-    wc.drive_length_m = std::max(100.0, duration * cruise_speed(config_.world));
-    world_ = std::make_shared<const World>(make_world(wc));
-    build_ego();
-    if (config_.revisit) {
-      // Shrink the loop until the drive actually closes it (turns and stops
-      // make the average speed much lower than the cruise speed); keep the
-      // smallest loop the world offers when none is closed.
-      for (const double f : {0.45, 0.35, 0.27, 0.2, 0.15}) {
-        if (ego_.arclength_m(duration) >= world_->loop_length_m + 5.0) break;
-        wc.loop_target_m = f * wc.drive_length_m;
-        auto smaller = std::make_shared<const World>(make_world(wc));
-        if (smaller->loop_length_m >= world_->loop_length_m) continue;
-        world_ = std::move(smaller);
-        build_ego();
-      }
-    }
+    world_ = std::make_shared<const World>(make_world(world_config(config_)));
+    ego_ = ego_trajectory(world_->ego_route, world_->ego_motion, world_->ego_stop_points);
     traffic_ = std::make_shared<const Traffic>(*world_, config_.traffic, config_.seed, duration + 1.0);
     T_body_lidar_ = SE3d(SO3d(), Eigen::Vector3d(0.0, 0.0, config_.lidar.mount_height_m));
+  }
+
+  /// The world a drive uses: its kind, seed and revisit flag, a route long
+  /// enough for the drive, and (revisit) the return time: the last frame's
+  /// sweep starts at the first frame's pose. Lets tests build the world and
+  /// ego route without ray casting or traffic.
+  static WorldConfig world_config(const SimulatorConfig& config) {
+    const double period_s = 1.0 / config.lidar.rate_hz;
+    WorldConfig wc;
+    wc.kind = config.world;
+    wc.seed = config.seed;
+    wc.revisit = config.revisit;
+    wc.drive_length_m = std::max(100.0, static_cast<double>(config.frames) * period_s * cruise_speed(config.world));
+    wc.return_time_s = static_cast<double>(config.frames > 0 ? config.frames - 1 : 0) * period_s;
+    return wc;
   }
 
   /// Typical cruise speed of a world kind [m/s] (urban 11, rural 16, highway 25).
@@ -230,33 +232,6 @@ class Simulator {
     std::uint32_t raw = 0;
     bool valid = false;
   };
-
-  void build_ego() {
-    TrajectoryConfig tc = world_->ego_motion;
-    const auto free_drive = Trajectory::through(world_->ego_route, tc);
-    // Stop arclengths: the first path sample within 2 m of each stop point,
-    // searched forward from the previous stop.
-    double s = 0.0;
-    const double L = free_drive.length_m();
-    for (const Eigen::Vector3d& p : world_->ego_stop_points) {
-      double best = -1.0;
-      double best_d = 2.0;
-      for (double q = s; q < L; q += 0.5) {
-        const double d = (free_drive.position_at_arclength(q) - p).head<2>().norm();
-        if (d < best_d) {
-          best_d = d;
-          best = q;
-        } else if (best >= 0.0 && d > best_d + 5.0) {
-          break;
-        }
-      }
-      if (best >= 0.0) {
-        tc.stop_at_arclength_m.push_back(best);
-        s = best + 1.0;
-      }
-    }
-    ego_ = tc.stop_at_arclength_m.empty() ? free_drive : Trajectory::through(world_->ego_route, tc);
-  }
 
   void cast_column(const SE3d& T_world_lidar, int c, std::size_t frame, const Bvh& dyn, std::vector<Cell>& cells) const {
     const Eigen::Matrix3d R = T_world_lidar.rotation();

@@ -11,9 +11,13 @@
 /// about 100 m) swept along the road every 2.5 m, its height the road's
 /// elevation profile blended into hills away from the road. On the inner
 /// side of curves the cross-section is shortened to 80% of the curve radius,
-/// so the strip never folds. Revisit: the road is a closed loop (rural: a
-/// perturbed circle of at least ~950 m; highway: a stadium of two straights
-/// joined by 250 m-radius bends, at least ~1570 m).
+/// so the strip never folds. Revisit (see revisit.hpp): the road stays open
+/// and the ego drives out and back, its straight fitted to the drive. Rural:
+/// in its lanes, U-turning (6 m radius) on paved turnarounds where the road
+/// is widened to ~8.5 m each side and kept clear of objects; drives too short
+/// for that (< ~20 s) circle on the turnaround itself. Highway: in the inner
+/// lanes, U-turning (4.75 m radius) through median crossings (median paved,
+/// guard rails and lights left out); traffic stays in the middle lanes.
 
 #include <Eigen/Core>
 
@@ -24,6 +28,7 @@
 
 #include <semlio/sim/path.hpp>
 #include <semlio/sim/random.hpp>
+#include <semlio/sim/revisit.hpp>
 #include <semlio/sim/world_builder.hpp>
 #include <semlio/sim/world_config.hpp>
 
@@ -50,36 +55,15 @@ struct Band {
   std::uint16_t raw_id;
 };
 
-/// Centreline of the road: points every `ds` (closed loops without the
-/// repeated end point).
+/// Centreline of an open road: points every `ds`.
 struct Centreline {
   std::vector<Eigen::Vector3d> points;
-  bool closed = false;
 };
 
-inline Centreline rural_centreline(Rng& rng, double length_m, bool closed, double ds) {
+/// Winding rural road of `length_m`: heading a sum of two sinusoids of
+/// arclength (700 m and 330 m periods).
+inline Centreline rural_centreline(Rng& rng, double length_m, double ds) {
   Centreline c;
-  c.closed = closed;
-  if (closed) {
-    const double R0 = std::max(length_m, 950.0) / (2.0 * std::numbers::pi);
-    const double a = rng.uniform(0.0, 6.28);
-    const double b = rng.uniform(0.0, 6.28);
-    // Sample the perturbed circle densely, then resample at ds.
-    std::vector<Eigen::Vector3d> dense;
-    for (int k = 0; k < 4000; ++k) {
-      const double phi = 2.0 * std::numbers::pi * k / 4000.0;
-      const double r = R0 * (1.0 + 0.08 * std::sin(2.0 * phi + a) + 0.03 * std::sin(3.0 * phi + b));
-      dense.emplace_back(r * std::cos(phi), r * std::sin(phi), 0.0);
-    }
-    dense.push_back(dense.front());
-    // Rescale so the loop has exactly the requested length.
-    const double scale = std::max(length_m, 950.0) / Polyline(dense).length();
-    for (auto& q : dense) q *= scale;
-    const Polyline pl(dense);
-    const int n = std::max(8, static_cast<int>(std::round(pl.length() / ds)));
-    for (int k = 0; k < n; ++k) c.points.push_back(pl.at(pl.length() * k / n));
-    return c;
-  }
   const double p1 = rng.uniform(0.0, 6.28);
   const double p2 = rng.uniform(0.0, 6.28);
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
@@ -94,31 +78,9 @@ inline Centreline rural_centreline(Rng& rng, double length_m, bool closed, doubl
   return c;
 }
 
-inline Centreline highway_centreline(double length_m, bool closed, double ds) {
+/// Nearly straight highway of `length_m` (heading within +-0.04 rad).
+inline Centreline highway_centreline(double length_m, double ds) {
   Centreline c;
-  c.closed = closed;
-  if (closed) {
-    const double R = 250.0;
-    const double straight = std::max(0.0, 0.5 * (length_m - 2.0 * std::numbers::pi * R));
-    std::vector<Eigen::Vector3d> dense;
-    const auto add_line = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-      const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / ds)));
-      for (int k = 0; k < n; ++k) dense.push_back(a + (b - a) * (static_cast<double>(k) / n));
-    };
-    const auto add_arc = [&](const Eigen::Vector3d& centre, double a0) {
-      const int n = static_cast<int>(std::ceil(std::numbers::pi * R / ds));
-      for (int k = 0; k < n; ++k) {
-        const double a = a0 + std::numbers::pi * k / n;
-        dense.push_back(centre + R * Eigen::Vector3d(std::cos(a), std::sin(a), 0.0));
-      }
-    };
-    add_line({0.0, -R, 0.0}, {straight, -R, 0.0});
-    add_arc({straight, 0.0, 0.0}, -0.5 * std::numbers::pi);
-    add_line({straight, R, 0.0}, {0.0, R, 0.0});
-    add_arc({0.0, 0.0, 0.0}, 0.5 * std::numbers::pi);
-    c.points = dense;
-    return c;
-  }
   const int n = static_cast<int>(std::ceil(length_m / ds));
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   for (int k = 0; k <= n; ++k) {
@@ -129,27 +91,35 @@ inline Centreline highway_centreline(double length_m, bool closed, double ds) {
   return c;
 }
 
+/// Road coordinates (u along the centreline from `s0`, l to its left) on an
+/// open centreline with elevation `road_z`: the world point, z on the road.
+template <typename RoadZ>
+Eigen::Vector3d road_point(const Polyline& centre, const RoadZ& road_z, double s0, double u, double l) {
+  const double s = s0 + u;
+  Eigen::Vector3d t = centre.at(s + 1.0) - centre.at(s - 1.0);
+  t.z() = 0.0;
+  t.normalize();
+  Eigen::Vector3d p = centre.at(s) + l * Eigen::Vector3d(-t.y(), t.x(), 0.0);
+  p.z() = road_z(s);
+  return p;
+}
+
 /// Builds the rural or highway world.
 inline World make_strip_world(const WorldConfig& config) {
   const bool rural = config.kind == WorldKind::kRural;
   const double ds = 2.5;
   Rng rng(config.seed, 11);
   const double cruise = rural ? 16.0 : 25.0;
-  const double loop_target = config.loop_target_m > 0.0 ? config.loop_target_m : 0.6 * config.drive_length_m;
-  // Open roads start 150 m behind the ego so the first sweeps see road behind.
+  // Roads start 150 m behind the ego so the first sweeps see road behind.
   const double lead_in = 150.0;
   const double open_length = 1.3 * config.drive_length_m + 300.0 + lead_in;
-  Centreline cl = rural ? rural_centreline(rng, config.revisit ? loop_target : open_length, config.revisit, ds)
-                        : highway_centreline(config.revisit ? loop_target : open_length, config.revisit, ds);
+  const Centreline cl = rural ? rural_centreline(rng, open_length, ds) : highway_centreline(open_length, ds);
   const std::size_t n = cl.points.size();
-  const auto idx = [&](long i) {
-    const auto nn = static_cast<long>(n);
-    return static_cast<std::size_t>(cl.closed ? ((i % nn) + nn) % nn : std::clamp(i, 0L, nn - 1));
-  };
+  const auto idx = [&](long i) { return static_cast<std::size_t>(std::clamp(i, 0L, static_cast<long>(n) - 1)); };
   // Arclength, tangent, left normal, signed curvature per sample.
   std::vector<double> s(n, 0.0);
   for (std::size_t i = 1; i < n; ++i) s[i] = s[i - 1] + (cl.points[i] - cl.points[i - 1]).norm();
-  const double total = cl.closed ? s.back() + (cl.points.front() - cl.points.back()).norm() : s.back();
+  const double total = s.back();
   std::vector<Eigen::Vector3d> left(n);
   std::vector<double> kappa(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
@@ -165,10 +135,9 @@ inline World make_strip_world(const WorldConfig& config) {
     const double seg = 0.5 * ((b - a).norm() + (c - b).norm());
     kappa[i] = seg > 0.0 ? cross / seg : 0.0;
   }
-  // Elevation profile of the road (periodic on loops) and hills around it.
-  const auto period = [&](double want) { return cl.closed ? total / std::max(1.0, std::round(total / want)) : want; };
-  const double l1 = period(rural ? 1000.0 : 2000.0);
-  const double l2 = period(rural ? 400.0 : 900.0);
+  // Elevation profile of the road and hills around it.
+  const double l1 = rural ? 1000.0 : 2000.0;
+  const double l2 = rural ? 400.0 : 900.0;
   const double a1 = rural ? 9.0 : 2.0;
   const double a2 = rural ? 3.0 : 0.5;
   const double ph1 = rng.uniform(0.0, 6.28);
@@ -195,6 +164,75 @@ inline World make_strip_world(const WorldConfig& config) {
              {-2.5, 2.5, raw::kTerrain}, {2.5, 3.0, raw::kRoad},     {3.0, 13.5, raw::kRoad},
              {13.5, 16.0, raw::kRoad}};
   }
+
+  World world;
+  world.config = config;
+  world.ego_motion.cruise_speed_mps = cruise;
+  world.ego_motion.turn_radius_m = 50.0;
+  world.ego_motion.min_blend_length_m = 1.0;
+  world.ego_motion.start_at_rest = false;
+
+  // Revisit: an out-and-back drive starting `lead_in` into the road. Its
+  // U-turns need room: rural roads get a paved turnaround (the road widened
+  // to ~8.5 m each side over the U-turn), highways a median crossing (median
+  // paved, its guard rails and lights left out).
+  std::vector<std::array<double, 2>> turn_zones;  // centreline arclength ranges of the U-turns [m]
+  const double widen = rural ? 5.25 : 0.0;         // extra paved width each side in turn zones [m]
+  RevisitPlan plan;
+  if (config.revisit) {
+    const double t_return = config.return_time_s > 0.0 ? config.return_time_s : config.drive_length_m / cruise;
+    world.return_time_s = t_return;
+    world.ego_motion.end_at_rest = false;  // the tail lap is never reached
+    const Polyline centre(cl.points);
+    const auto to_world = [&](double u, double l) { return road_point(centre, road_z, lead_in, u, l); };
+    // Rural: out and back in the two lanes, swinging onto the turnaround for
+    // a 6 m U-turn; short drives run on the turnaround itself. Highway: the
+    // inner lanes, U-turn (4.75 m) through the median.
+    // Straights are sampled every 5 m (the Trajectory rounds the gentle road
+    // curvature between samples; fitting is several times faster).
+    const StadiumShape lanes_shape =
+        rural ? StadiumShape{.lane_m = 1.625, .turn_radius_m = 6.0, .swing_m = 16.0, .step_m = 1.0, .straight_step_m = 5.0}
+              : StadiumShape{.lane_m = 4.75, .turn_radius_m = 4.75, .swing_m = 0.0, .step_m = 1.0, .straight_step_m = 5.0};
+    const StadiumShape tight_shape{.lane_m = 5.25, .turn_radius_m = 5.25, .swing_m = 0.0, .step_m = 1.0,
+                                   .straight_step_m = 5.0};
+    const double max_straight = total - lead_in - 200.0;
+    plan = plan_out_and_back(lanes_shape, max_straight, to_world, world.ego_motion, t_return);
+    StadiumShape used = lanes_shape;
+    if (rural && !plan.fit.ok) {
+      plan = plan_out_and_back(tight_shape, max_straight, to_world, world.ego_motion, t_return);
+      used = tight_shape;
+    }
+    const double L = plan.fit.param;
+    const double reach = used.swing_m + used.turn_radius_m;
+    if (used.lane_m >= used.turn_radius_m && rural) {
+      turn_zones.push_back({lead_in - reach - 4.0, lead_in + L + reach + 4.0});
+    } else {
+      turn_zones.push_back({lead_in - reach - 4.0, lead_in + 4.0});
+      turn_zones.push_back({lead_in + L - 4.0, lead_in + L + reach + 4.0});
+    }
+    world.ego_route = plan.route;
+    world.loop_length_m = plan.lap_length_m;
+    world.return_error_m = plan.fit.error_m;
+    world.revisit_route = "out_and_back";
+  }
+  // Weight of the turn zones at arclength sv: 1 inside, smooth to 0 over `ramp` m.
+  const auto zone_weight = [&](double sv, double ramp) {
+    double w = 0.0;
+    for (const auto& z : turn_zones) {
+      const double d = std::max({z[0] - sv, sv - z[1], 0.0});
+      const double x = std::clamp(1.0 - d / ramp, 0.0, 1.0);
+      w = std::max(w, x * x * (3.0 - 2.0 * x));
+    }
+    return w;
+  };
+  std::vector<double> edge(n, road_edge);  // paved half-width per sample
+  for (std::size_t i = 0; i < n; ++i) edge[i] = road_edge + widen * zone_weight(s[i], 8.0);
+  // Objects keep clear of the turn zones (and of the widened road).
+  const auto clear = [&](std::size_t i, double l) {
+    return turn_zones.empty() || zone_weight(s[i], 12.0) <= 0.0 || std::abs(l) > road_edge + widen + 4.0;
+  };
+  const auto median_open = [&](std::size_t i) { return !rural && zone_weight(s[i], 1.0) > 0.0; };
+
   const std::vector<double> outward{0.0, 0.6, 1.6, 3.0, 5.0, 7.5, 10.5, 14.0, 18.0, 23.0,
                                     29.0, 36.0, 44.0, 53.0, 63.0, 74.0, 86.0, 100.0};
   std::vector<double> lat;
@@ -203,8 +241,10 @@ inline World make_strip_world(const WorldConfig& config) {
   }
   for (const Band& b : bands) lat.push_back(b.l0);
   for (const double d : outward) lat.push_back(road_edge + d);
-  const auto band_class = [&](double l0, double l1v) -> std::uint16_t {
+  const auto band_class = [&](std::size_t i, double l0, double l1v) -> std::uint16_t {
     const double m = 0.5 * (l0 + l1v);
+    if (std::abs(m) < edge[i] && std::abs(m) > road_edge) return raw::kRoad;  // turnaround
+    if (median_open(i) && std::abs(m) < road_edge) return raw::kRoad;       // median crossing
     for (const Band& b : bands) {
       if (m > b.l0 && m < b.l1) return b.raw_id;
     }
@@ -212,7 +252,7 @@ inline World make_strip_world(const WorldConfig& config) {
   };
   // Height of the ground at sample i, lateral offset l, position p.
   const auto ground_z = [&](std::size_t i, double l, const Eigen::Vector3d& p) {
-    const double d = std::abs(l) - road_edge;
+    const double d = std::abs(l) - edge[i];
     double z = road_z(s[i]);
     if (d > 0.0) {
       const double u = std::clamp(d / 35.0, 0.0, 1.0);
@@ -251,7 +291,7 @@ inline World make_strip_world(const WorldConfig& config) {
   }
   wb.tiled_rect(lo.x() - 400.0, lo.y() - 400.0, hi.x() + 400.0, hi.y() + 400.0, zmin - 30.0, raw::kTerrain, 200.0);
 
-  const std::size_t segments = cl.closed ? n : n - 1;
+  const std::size_t segments = n - 1;
   std::vector<Eigen::Vector3d> row0(lat.size());
   std::vector<Eigen::Vector3d> row1(lat.size());
   for (std::size_t j = 0; j < lat.size(); ++j) row0[j] = vertex(0, lat[j]);
@@ -259,7 +299,7 @@ inline World make_strip_world(const WorldConfig& config) {
     const std::size_t i1 = idx(static_cast<long>(i) + 1);
     for (std::size_t j = 0; j < lat.size(); ++j) row1[j] = vertex(i1, lat[j]);
     for (std::size_t j = 0; j + 1 < lat.size(); ++j) {
-      wb.quad(row0[j], row1[j], row1[j + 1], row0[j + 1], band_class(lat[j], lat[j + 1]));
+      wb.quad(row0[j], row1[j], row1[j + 1], row0[j + 1], band_class(i, lat[j], lat[j + 1]));
     }
     // Lane markings: dashed centre (rural) or lane dividers (highway), solid edges.
     const auto mark = [&](double l, double half_width, bool dashed) {
@@ -299,14 +339,18 @@ inline World make_strip_world(const WorldConfig& config) {
       for (const double side : {-1.0, 1.0}) {
         if (rng.chance(0.35 + 0.9 * forest)) {
           const double l = side * (road_edge + rng.uniform(3.5, 70.0));
+          if (!clear(i, l)) continue;
           if (rng.chance(0.75)) wb.tree(place(i, l), rng, rng.uniform(0.9, 1.6));
           else wb.bush(place(i, l), rng);
         }
-        if (rng.chance(0.25)) wb.bush(place(i, side * (road_edge + rng.uniform(2.0, 8.0))), rng);
+        if (rng.chance(0.25)) {
+          const double l = side * (road_edge + rng.uniform(2.0, 8.0));
+          if (clear(i, l)) wb.bush(place(i, l), rng);
+        }
       }
-      if (i % 20 == 0) wb.pole(place(i, -(road_edge + 2.5)), 9.0, 0.13);
-      if (i % 160 == 40) wb.sign(place(i, -(road_edge + 1.5)), yaw, rng);
-      if (i % 240 == 120 && rng.chance(0.7)) {  // a house with a fence
+      if (i % 20 == 0 && clear(i, road_edge + 2.5)) wb.pole(place(i, -(road_edge + 2.5)), 9.0, 0.13);
+      if (i % 160 == 40 && clear(i, road_edge + 1.5)) wb.sign(place(i, -(road_edge + 1.5)), yaw, rng);
+      if (i % 240 == 120 && clear(i, 0.0) && rng.chance(0.7)) {  // a house with a fence
         const double side = rng.chance(0.5) ? 1.0 : -1.0;
         const double l = side * (road_edge + rng.uniform(18.0, 35.0));
         const Eigen::Vector3d g = place(i, l);
@@ -315,7 +359,7 @@ inline World make_strip_world(const WorldConfig& config) {
                yaw + rng.uniform(-0.3, 0.3), raw::kBuilding, wb.new_instance(), rng.uniform(0.7, 1.3));
       }
       // Field fences along some stretches.
-      if (std::sin(2.0 * std::numbers::pi * sv / 700.0 + forest_phase) > 0.6 && i + 1 < n) {
+      if (std::sin(2.0 * std::numbers::pi * sv / 700.0 + forest_phase) > 0.6 && i + 1 < n && clear(i, road_edge + 6.0)) {
         const Eigen::Vector3d a = place(i, road_edge + 6.0);
         const Eigen::Vector3d b = place(idx(static_cast<long>(i) + 1), road_edge + 6.0);
         const Eigen::Vector3d m = 0.5 * (a + b);
@@ -324,8 +368,9 @@ inline World make_strip_world(const WorldConfig& config) {
     } else {
       // Guard rails (fence) on the median and both shoulders, as boxes per segment.
       const std::size_t i1 = idx(static_cast<long>(i) + 1);
-      if (cl.closed || i + 1 < n) {
+      if (i + 1 < n) {
         for (const double l : {-16.3, -2.3, 2.3, 16.3}) {
+          if (std::abs(l) < 3.0 && (median_open(i) || median_open(i1))) continue;  // median crossing
           Eigen::Vector3d a = cl.points[i] + l * left[i];
           Eigen::Vector3d b = cl.points[i1] + l * left[i1];
           a.z() = road_z(s[i]);
@@ -338,7 +383,7 @@ inline World make_strip_world(const WorldConfig& config) {
         }
       }
       if (i % 200 == 100) wb.sign(place(i, -(road_edge + 1.5)), yaw, rng);
-      if (i % 24 == 0) wb.pole(place(i, 0.0), 10.0, 0.15);
+      if (i % 24 == 0 && clear(i, 0.0)) wb.pole(place(i, 0.0), 10.0, 0.15);
       if (rng.chance(0.08)) {
         const double side = rng.chance(0.5) ? 1.0 : -1.0;
         wb.tree(place(i, side * (road_edge + rng.uniform(15.0, 80.0))), rng, rng.uniform(1.0, 1.6));
@@ -346,40 +391,47 @@ inline World make_strip_world(const WorldConfig& config) {
     }
   }
 
-  World world;
-  world.config = config;
-  world.ego_motion.cruise_speed_mps = cruise;
-  world.ego_motion.turn_radius_m = 50.0;
-  world.ego_motion.min_blend_length_m = 1.0;
-  world.ego_motion.start_at_rest = false;
-  // Route: lane centres as dense points (loops repeated to cover the drive).
+  // Route: lane centres as dense points.
   const double ego_lane = rural ? -1.625 : -8.25;
   std::vector<Eigen::Vector3d> centre;
-  const int loops = cl.closed ? std::max(2, static_cast<int>(std::ceil(1.3 * config.drive_length_m / total)) + 1) : 1;
-  const auto first = cl.closed ? std::size_t{0} : static_cast<std::size_t>(lead_in / ds);
-  for (int k = 0; k < loops; ++k) {
-    for (std::size_t i = (k == 0 ? first : 0); i < n; ++i) {
-      Eigen::Vector3d p = cl.points[i];
-      p.z() = road_z(s[i]);
-      centre.push_back(p);
-    }
-  }
-  if (cl.closed) {
-    Eigen::Vector3d p = cl.points.front();
-    p.z() = road_z(0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    Eigen::Vector3d p = cl.points[i];
+    p.z() = road_z(s[i]);
     centre.push_back(p);
-    world.loop_length_m = total;
   }
   const auto lane_points = [&](const std::vector<Eigen::Vector3d>& path, double l) {
     std::vector<Eigen::Vector3d> out = offset_path(path, l);
     for (std::size_t i = 0; i < out.size(); ++i) out[i].z() = path[i].z();
     return out;
   };
-  world.ego_route = lane_points(centre, ego_lane);
-  world.lanes.alongside = {lane_points(centre, rural ? ego_lane : -4.75), cruise, 50.0};
-  const auto back = reversed(centre);
-  world.lanes.oncoming = {lane_points(back, rural ? -1.625 : -8.25), cruise, 50.0};
-  if (rural) world.lanes.bikes = {lane_points(back, -3.9), 6.0, 50.0};
+  const auto from = [&](double sv) {
+    const auto k = static_cast<std::ptrdiff_t>(std::clamp(sv / ds, 0.0, static_cast<double>(n - 2)));
+    return std::vector<Eigen::Vector3d>(centre.begin() + k, centre.end());
+  };
+  if (!config.revisit) {
+    const auto ahead = from(lead_in);
+    world.ego_route = lane_points(ahead, ego_lane);
+    world.lanes.alongside = {lane_points(ahead, rural ? ego_lane : -4.75), cruise, 50.0};
+    const auto back = reversed(ahead);
+    world.lanes.oncoming = {lane_points(back, rural ? -1.625 : -8.25), cruise, 50.0};
+    if (rural) world.lanes.bikes = {lane_points(back, -3.9), 6.0, 50.0};
+  } else if (rural) {
+    // One lane per direction and U-turns across both: traffic follows the
+    // ego's own loop ahead of it (never on it, see alongside_period_s); it
+    // is seen oncoming on the way back. No bikes.
+    // Loops shorter than 80 m (drives under ~25 s) carry no traffic.
+    if (plan.lap_length_m >= 80.0) {
+      std::vector<Eigen::Vector3d> lap(plan.route.begin(),
+                                       plan.route.begin() + static_cast<std::ptrdiff_t>(plan.route.size() / 2 + 1));
+      world.lanes.alongside = {repeat_lap(lap, 4), cruise, 50.0};
+      world.lanes.alongside_period_s = ego_trajectory(world.ego_route, world.ego_motion, {}).duration_s() / 2.0;
+    }
+  } else {
+    // Highway: traffic in the middle lanes, clear of the ego's inner-lane loop.
+    const auto ahead = from(lead_in + 0.5 * plan.fit.param);
+    world.lanes.alongside = {lane_points(ahead, -8.25), cruise, 50.0};
+    world.lanes.oncoming = {lane_points(reversed(from(0.0)), -8.25), cruise, 50.0};
+  }
   world.lanes.trucks = true;
   // Rural has one lane per direction: the "alongside" car drives ahead of the ego.
   world.lanes.alongside_first_offset_s = rural ? 2.5 : 0.4;

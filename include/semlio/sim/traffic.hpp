@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -126,17 +127,27 @@ class Traffic {
     // Time offsets spread over the part of the lane's schedule that is still
     // driving during [0, horizon] (so no actor sits parked at a lane's end),
     // at least 3 s apart.
-    const auto spread = [&](std::size_t lane, int count, double first_s, ActorKind kind, double truck_share) {
+    const auto spread = [&](std::size_t lane, int count, double first_s, ActorKind kind, double truck_share,
+                            double period_s = 0.0) {
       const double last_s = lanes_[lane].duration_s() - horizon_s;
       const double span = std::max(last_s - first_s, 1.0);
       const double slot = std::max(span / std::max(count, 1), 3.5);
       for (int k = 0; k < count; ++k) {
         const double base = first_s + slot * k;
         if (k > 0 && base > last_s) break;
+        const ActorKind drawn = (kind == ActorKind::kCar && rng.chance(truck_share)) ? ActorKind::kTruck : kind;
+        double offset = base + (k == 0 ? 0.0 : rng.uniform(0.0, slot - 3.0));
+        if (period_s > 0.0) {
+          // The lane is the ego's own loop: stay >= 2.5 s away from it.
+          if (period_s < 5.0) break;
+          const double m = std::fmod(offset, period_s);
+          if (m < 2.5) offset += 2.5 - m;
+          if (m > period_s - 2.5) offset += period_s - m + 2.5;
+        }
         Actor a;
-        a.kind = (kind == ActorKind::kCar && rng.chance(truck_share)) ? ActorKind::kTruck : kind;
+        a.kind = drawn;
         a.lane = lane;
-        a.time_offset_s = base + (k == 0 ? 0.0 : rng.uniform(0.0, slot - 3.0));
+        a.time_offset_s = offset;
         a.refl_scale = static_cast<float>(rng.uniform(0.6, 1.5));
         a.instance = next_id++;
         actors_.push_back(a);
@@ -147,7 +158,7 @@ class Traffic {
       // The first one starts beside the ego (heavy) or a little ahead (light),
       // at a similar speed in the adjacent lane.
       spread(static_cast<std::size_t>(l), heavy ? 8 : 3, world.lanes.alongside_first_offset_s * (heavy ? 1.0 : 3.0),
-             ActorKind::kCar, truck_share);
+             ActorKind::kCar, truck_share, world.lanes.alongside_period_s);
     }
     if (const long l = add_lane(world.lanes.oncoming, 2.5); l >= 0) {
       spread(static_cast<std::size_t>(l), heavy ? 30 : 10, rng.uniform(0.0, 5.0), ActorKind::kCar, truck_share);

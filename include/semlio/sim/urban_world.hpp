@@ -9,11 +9,14 @@
 ///
 /// Route: the ego drives in the inner lane of its direction (1.75 m right of
 /// the street centreline); cars alongside use the outer lane, oncoming cars
-/// the inner and cyclists the outer lane of the other direction. Open route: first a rectangle loop of about 1.3 km (so a
-/// drive longer than ~1500 frames comes back to its start and revisits
-/// streets), then a random walk without U-turns. Revisit: the largest
-/// rectangle loop not longer than 60% of the drive estimate (at least one
-/// block), repeated.
+/// the inner and cyclists the outer lane of the other direction. Open route:
+/// first a rectangle loop of about 1.3 km (so a drive longer than ~1500
+/// frames comes back to its start and revisits streets), then a random walk
+/// without U-turns. Revisit (see revisit.hpp): a block loop (a rectangle of
+/// streets, driven once or more, stopping at every other turn for a fitted
+/// 0.5-20 s) when one fits the drive, else an out-and-back drive along the
+/// middle street with U-turns (drives of ~10 s to ~70 s); either way the ego
+/// is back at its start pose at the return time.
 
 #include <Eigen/Core>
 
@@ -26,6 +29,7 @@
 
 #include <semlio/sim/path.hpp>
 #include <semlio/sim/random.hpp>
+#include <semlio/sim/revisit.hpp>
 #include <semlio/sim/world_builder.hpp>
 #include <semlio/sim/world_config.hpp>
 
@@ -167,6 +171,138 @@ inline double polyline_length(const std::vector<Eigen::Vector3d>& p) {
   return len;
 }
 
+/// Stops 12 m before about a quarter of the intersections on the corner
+/// route (edges of at least 40 m); `route` is the ego lane of `corners`.
+inline std::vector<Eigen::Vector3d> urban_stops(const std::vector<Eigen::Vector3d>& corners,
+                                                const std::vector<Eigen::Vector3d>& route, Rng& rng) {
+  std::vector<Eigen::Vector3d> stops;
+  for (std::size_t k = 1; k + 1 < corners.size(); ++k) {
+    if (!rng.chance(0.25)) continue;
+    const Eigen::Vector3d dir = (corners[k] - corners[k - 1]).normalized();
+    if ((corners[k] - corners[k - 1]).norm() < 40.0) continue;
+    stops.push_back(route[k] - 12.0 * dir);
+  }
+  return stops;
+}
+
+/// Revisit by a block loop: a counter-clockwise rectangle of streets driven
+/// `laps` times (plus a tail lap) at the urban cruise speed, stopping before
+/// every other turn (a left turn at a traffic light); the common stop duration
+/// (0.5-20 s) is fitted so the ego is back at its start at `t_return`.
+/// Candidates are tried in order of their estimated lap time; returns false
+/// when none closes (drives shorter than about one block loop, ~45 s). On
+/// success sets the ego route, stops and loop fields of `world`, and
+/// `lane_corners` to the centreline corners (two extra laps) traffic follows.
+inline bool plan_block_loop(World& world, const std::vector<double>& X, const std::vector<double>& Y, int lo, int hi,
+                            double t_return, std::vector<Eigen::Vector3d>& lane_corners) {
+  struct Candidate {
+    int i0, j0, i1, j1, laps;
+    double score;
+  };
+  std::vector<Candidate> cands;
+  double shortest = 1e18;
+  for (int i0 = lo; i0 < hi; ++i0) {
+    for (int i1 = i0 + 1; i1 <= hi; ++i1) {
+      for (int j0 = lo; j0 < hi; ++j0) {
+        for (int j1 = j0 + 1; j1 <= hi; ++j1) {
+          const double p = 2.0 * (X[static_cast<std::size_t>(i1)] - X[static_cast<std::size_t>(i0)] +
+                                  Y[static_cast<std::size_t>(j1)] - Y[static_cast<std::size_t>(j0)]);
+          shortest = std::min(shortest, p);
+          // Lap time estimate (measured): 11 m/s, plus ~40 s for 4 turns
+          // and 2 stops, plus the stops' duration (5 s nominal).
+          const double lap_s = p / 11.0 + 40.0 + 2.0 * 5.0;
+          for (int laps = 1; laps <= 12; ++laps) {
+            cands.push_back({i0, j0, i1, j1, laps, std::abs(laps * lap_s - t_return) / t_return + 0.01 * laps});
+          }
+        }
+      }
+    }
+  }
+  // Even the smallest block at cruise speed without stops takes longer.
+  if (shortest / 11.0 > t_return) return false;
+  std::stable_sort(cands.begin(), cands.end(), [](const Candidate& a, const Candidate& b) { return a.score < b.score; });
+  // Try up to 16 candidates of distinct lap count and perimeter (the aliased
+  // grid has many equal rectangles).
+  std::vector<std::array<double, 2>> tried;
+  for (const Candidate& k : cands) {
+    if (tried.size() >= 16) break;
+    const double p = 2.0 * (X[static_cast<std::size_t>(k.i1)] - X[static_cast<std::size_t>(k.i0)] +
+                            Y[static_cast<std::size_t>(k.j1)] - Y[static_cast<std::size_t>(k.j0)]);
+    bool seen = false;
+    for (const auto& t : tried) seen = seen || (t[0] == k.laps && std::abs(t[1] - p) < 1.0);
+    if (seen) continue;
+    tried.push_back({static_cast<double>(k.laps), p});
+    const auto lap = rectangle_loop(X, Y, k.i0, k.j0, k.i1, k.j1);
+    const auto corners = repeat_lap(lap, k.laps + 1);
+    const auto route = offset_corners(corners, kEgoLane);
+    // Stop 12 m before every other turn (corners 1 and 3 of each lap; the
+    // lap's corner list is mid-edge, 4 corners, mid-edge).
+    std::vector<Eigen::Vector3d> stops;
+    for (std::size_t q = 1; q + 1 < corners.size(); ++q) {
+      if (q % 5 != 1 && q % 5 != 3) continue;
+      const Eigen::Vector3d dir = (corners[q] - corners[q - 1]).normalized();
+      stops.push_back(route[q] - 12.0 * dir);
+    }
+    TrajectoryConfig motion = world.ego_motion;
+    // Longer stops, less distance driven: fit the negated closure.
+    const auto closure = [&](double stop_s) {
+      motion.stop_duration_s = stop_s;
+      return -lap_closure_m(ego_trajectory(route, motion, stops), t_return, k.laps, k.laps + 1);
+    };
+    const RevisitFit fit = fit_revisit(closure, 0.5, 20.0, 0.5);
+    if (!fit.ok) continue;
+    world.ego_motion.stop_duration_s = fit.param;
+    world.ego_route = route;
+    world.ego_stop_points = stops;
+    const Trajectory drive = ego_trajectory(route, world.ego_motion, stops);
+    world.loop_length_m = drive.length_m() / (k.laps + 1);
+    world.return_error_m = lap_closure_m(drive, t_return, k.laps, k.laps + 1);
+    world.revisit_route = "block_loop";
+    lane_corners = repeat_lap(lap, k.laps + 3);
+    return true;
+  }
+  return false;
+}
+
+/// Revisit by an out-and-back drive along the middle east-west street: out
+/// in the outer eastbound lane, a U-turn across the street (radius 5.25 m,
+/// outer lane to outer lane, ~13 km/h), back past the start in the outer
+/// westbound lane, a second U-turn and back to the start; the straight's
+/// length is fitted so the ego is back at `t_return` (from ~9 s up). Cars
+/// (no trucks) drive the same kind of loop in the inner lanes when the
+/// straight is at least 40 m (inside the ego's loop, so the paths never
+/// cross): alongside on the way out, oncoming on the way back.
+inline void plan_street_out_and_back(World& world, const std::vector<double>& X, const std::vector<double>& Y,
+                                     double t_return) {
+  // The loop starts at the intersection of the middle street with street 2
+  // and may stretch east up to street 7.
+  const double ys = Y[Y.size() / 2];
+  const double x0 = X[2];
+  const StadiumShape shape{.lane_m = -kOuterLane, .turn_radius_m = -kOuterLane, .swing_m = 0.0, .step_m = 1.0};
+  const double max_straight = X[X.size() - 2] - x0;
+  const auto to_world = [&](double u, double l) { return Eigen::Vector3d(x0 + u, ys + l, 0.0); };
+  const RevisitPlan plan = plan_out_and_back(shape, max_straight, to_world, world.ego_motion, t_return);
+  world.ego_route = plan.route;
+  world.ego_stop_points.clear();
+  world.loop_length_m = plan.lap_length_m;
+  world.return_error_m = plan.fit.error_m;
+  world.revisit_route = "out_and_back";
+  // Traffic: the inner-lane loop of the same straight, repeated to outlast the drive.
+  const StadiumShape inner{.lane_m = -kEgoLane, .turn_radius_m = -kEgoLane, .swing_m = 0.0, .step_m = 1.0};
+  std::vector<Eigen::Vector3d> lap;
+  for (const Eigen::Vector2d& q : stadium_lap(plan.fit.param, inner)) lap.push_back(to_world(q.x(), q.y()));
+  const double lap_len = std::max(polyline_length(lap), 1.0);
+  const int laps = 2 + static_cast<int>(std::ceil(1.5 * (t_return + 30.0) * 11.0 / lap_len));
+  // Tight loops (straights < 40 m, drives under ~25 s) carry no cars: they
+  // would spin in the middle of the street. No trucks: their length would
+  // sweep into the ego's U-turn.
+  world.lanes.alongside = {};
+  if (plan.fit.param >= 40.0) world.lanes.alongside = {repeat_lap(lap, laps), 11.0, 1.5};
+  world.lanes.oncoming = {};
+  world.lanes.bikes = {};
+  world.lanes.trucks = false;
+}
+
 /// Builds the urban or aliased world.
 inline World make_urban_world(const WorldConfig& config) {
   const bool aliased = config.kind == WorldKind::kAliased;
@@ -235,38 +371,19 @@ inline World make_urban_world(const WorldConfig& config) {
   std::vector<Eigen::Vector3d> corners;
   const int lo = 1;
   const int hi = kBlocks - 1;
+  // Centreline corners the traffic lanes and walkways follow (the ego's
+  // route unless revisit picks an out-and-back drive).
+  std::vector<Eigen::Vector3d> lane_corners;
+  bool out_and_back = false;
   if (config.revisit) {
-    const double target = config.loop_target_m > 0.0 ? config.loop_target_m : 0.6 * config.drive_length_m;
-    // The longest rectangle loop not longer than the target, anywhere in the
-    // grid; the shortest one when none fits.
-    std::array<int, 4> best{lo, lo, 1, 1};
-    double best_p = -1.0;
-    std::array<int, 4> shortest{lo, lo, 1, 1};
-    double shortest_p = 1e18;
-    for (int i0 = lo; i0 < hi; ++i0) {
-      for (int j0 = lo; j0 < hi; ++j0) {
-        for (int a = 1; i0 + a <= hi; ++a) {
-          for (int b = 1; j0 + b <= hi; ++b) {
-            const double p = 2.0 * (X[static_cast<std::size_t>(i0 + a)] - X[static_cast<std::size_t>(i0)] +
-                                    Y[static_cast<std::size_t>(j0 + b)] - Y[static_cast<std::size_t>(j0)]);
-            if (p <= target && p > best_p) {
-              best_p = p;
-              best = {i0, j0, a, b};
-            }
-            if (p < shortest_p) {
-              shortest_p = p;
-              shortest = {i0, j0, a, b};
-            }
-          }
-        }
-      }
-    }
-    if (best_p < 0.0) best = shortest;
-    const auto loop = rectangle_loop(X, Y, best[0], best[1], best[0] + best[2], best[1] + best[3]);
-    world.loop_length_m = polyline_length(loop);
-    const int loops = std::max(2, static_cast<int>(std::ceil(1.3 * config.drive_length_m / world.loop_length_m)) + 1);
-    for (int k = 0; k < loops; ++k) {
-      corners.insert(corners.end(), loop.begin() + (k == 0 ? 0 : 1), loop.end());
+    const double t_return = config.return_time_s > 0.0 ? config.return_time_s : config.drive_length_m / 9.0;
+    world.return_time_s = t_return;
+    world.ego_motion.end_at_rest = false;  // the tail lap is never reached
+    if (!plan_block_loop(world, X, Y, lo, hi, t_return, lane_corners)) {
+      out_and_back = true;
+      plan_street_out_and_back(world, X, Y, t_return);
+      const double ys = Y[static_cast<std::size_t>(kBlocks / 2)];
+      for (int i = lo; i <= hi; ++i) lane_corners.emplace_back(X[static_cast<std::size_t>(i)], ys, 0.0);
     }
   } else {
     // A first loop of about 950 m, then a random walk.
@@ -324,19 +441,17 @@ inline World make_urban_world(const WorldConfig& config) {
       corners.push_back(p);
     }
   }
-  world.ego_route = offset_corners(corners, kEgoLane);
-  // Stops 12 m before about a quarter of the intersections the ego crosses.
-  for (std::size_t k = 1; k + 1 < corners.size(); ++k) {
-    if (!route_rng.chance(0.25)) continue;
-    const Eigen::Vector3d dir = (corners[k] - corners[k - 1]).normalized();
-    if ((corners[k] - corners[k - 1]).norm() < 40.0) continue;
-    world.ego_stop_points.push_back(world.ego_route[k] - 12.0 * dir);
+  if (!config.revisit) {
+    world.ego_route = offset_corners(corners, kEgoLane);
+    world.ego_stop_points = urban_stops(corners, world.ego_route, route_rng);
+    lane_corners = corners;
   }
-
-  world.lanes.alongside = {offset_corners(corners, kOuterLane), 11.0, 8.0};
-  const auto back = reversed(corners);
-  world.lanes.oncoming = {offset_corners(back, kEgoLane), 11.0, 8.0};
-  world.lanes.bikes = {offset_corners(back, kOuterLane), 5.0, 6.0};
+  if (!out_and_back) {
+    world.lanes.alongside = {offset_corners(lane_corners, kOuterLane), 11.0, 8.0};
+    const auto back = reversed(lane_corners);
+    world.lanes.oncoming = {offset_corners(back, kEgoLane), 11.0, 8.0};
+    world.lanes.bikes = {offset_corners(back, kOuterLane), 5.0, 6.0};
+  }
   // Pedestrian loops on the sidewalks of the blocks beside the route.
   const double walk = kParkingOuter + 1.75;
   const auto block_of = [&](const std::vector<double>& V, double v) {
@@ -349,9 +464,9 @@ inline World make_urban_world(const WorldConfig& config) {
     }
     return -1;
   };
-  for (std::size_t k = 0; k + 1 < corners.size() && world.lanes.walkways.size() < 8; ++k) {
-    const Eigen::Vector3d m = 0.5 * (corners[k] + corners[k + 1]);
-    const bool along_x = std::abs(corners[k + 1].y() - corners[k].y()) < 1.0;
+  for (std::size_t k = 0; k + 1 < lane_corners.size() && world.lanes.walkways.size() < 8; ++k) {
+    const Eigen::Vector3d m = 0.5 * (lane_corners[k] + lane_corners[k + 1]);
+    const bool along_x = std::abs(lane_corners[k + 1].y() - lane_corners[k].y()) < 1.0;
     std::array<std::array<int, 2>, 2> blocks{};
     if (along_x) {
       const int js = street_of(Y, m.y());

@@ -43,8 +43,11 @@ struct WorldConfig {
   WorldKind kind = WorldKind::kUrban;  ///< world family
   std::uint64_t seed = 1;              ///< seed of every random choice
   double drive_length_m = 1200.0;      ///< the route is at least this long (plus margin) [m]
-  bool revisit = false;                ///< route is a closed loop no longer than drive_length_m
-  double loop_target_m = 0.0;          ///< revisit: longest loop wanted [m] (0: 0.6 * drive_length_m)
+  /// Revisit: the route is a closed lap sized so that the ego is back at its
+  /// start pose (same heading, at speed) exactly at return_time_s (see
+  /// revisit.hpp); the lap is driven twice, the second lap being a tail.
+  bool revisit = false;
+  double return_time_s = 0.0;          ///< revisit: when the ego must be back [s] (0: drive_length_m / typical speed)
 };
 
 /// A path traffic drives on (world frame, road surface) and its speed.
@@ -62,6 +65,10 @@ struct TrafficLanes {
   std::vector<Lane> walkways;   ///< pedestrian loops (empty: none)
   bool trucks = true;           ///< whether trucks appear among cars
   double alongside_first_offset_s = 0.4;  ///< the first alongside actor is this far ahead in time [s]
+  /// > 0: the alongside lane repeats the ego's own loop with about this lap
+  /// time [s]; actor time offsets keep >= 2.5 s from its multiples, so no
+  /// actor drives on top of the ego.
+  double alongside_period_s = 0.0;
 };
 
 /// A generated world. The BVH is immutable; casting is thread-safe.
@@ -72,7 +79,10 @@ struct World {
   TrajectoryConfig ego_motion;                 ///< ego speeds and turn radius (stops: see ego_stop_points)
   std::vector<Eigen::Vector3d> ego_stop_points;  ///< the ego stops here (world frame; on its route, in order)
   TrafficLanes lanes;                          ///< traffic paths
-  double loop_length_m = 0.0;                  ///< revisit: length of one loop of the route [m] (0: open route)
+  double loop_length_m = 0.0;                  ///< revisit: length of one lap of the ego path [m] (0: open route)
+  double return_time_s = 0.0;                  ///< revisit: time the ego is back at its start [s] (0: open route)
+  double return_error_m = 0.0;                 ///< revisit: distance driven at return_time_s minus loop_length_m [m]
+  std::string revisit_route;                   ///< revisit: "block_loop" or "out_and_back" (empty: open route)
 };
 
 }  // namespace semlio::sim
