@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # Builds and runs the association benchmarks (bench/frontend/bench_association.cpp)
-# and prints, from that one run, the cost ratios the front-end issue targets:
+# on real KITTI (kitti_*), simulated urban (sim_*) and synthetic street
+# (street_*) inputs and prints, from that one run, the cost ratios the
+# front-end issue targets:
 #   NormalConsistency / NearestK            (target <= 2.0, stretch <= 1.5)
 #   NormalConsistencyReference / NormalConsistency   (target >= 10)
 # Ratios use CPU time (robust on a shared machine). Extra arguments go to the
-# benchmark binary (e.g. --benchmark_min_time=1).
+# association benchmark binary (e.g. --benchmark_min_time=1). Then runs
+# bench_gauss_newton (one Gauss-Newton iteration, residual accumulation and
+# search-structure builds on the real KITTI pair) unless NO_GN=1.
 # Environment: BUILD_DIR (default build-bench), JOBS (default 2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,7 +16,7 @@ cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build-bench}
 JOBS=${JOBS:-2}
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DSEMLIO_BUILD_BENCHMARKS=ON >/dev/null
-cmake --build "$BUILD_DIR" -j "$JOBS" --target bench_association >/dev/null
+cmake --build "$BUILD_DIR" -j "$JOBS" --target bench_association bench_gauss_newton >/dev/null
 
 json=$(mktemp)
 trap 'rm -f "$json"' EXIT
@@ -29,9 +33,12 @@ def cpu_ms(name):
     return b["cpu_time"] * scale
 print()
 print("Association cost ratios (CPU time, one run)")
-print(f"{'scene':<18}{'NearestK ms':>13}{'NormalCons. ms':>16}{'Reference ms':>14}{'NC/NearestK':>13}{'Ref/NC':>9}")
+print(f"{'input':<10}{'scene':<18}{'NearestK ms':>13}{'NormalCons. ms':>16}{'Reference ms':>14}{'NC/NearestK':>13}{'Ref/NC':>9}")
 ok = True
-for scene in ("kitti_surfaces", "kitti_corners", "kitti_dense", "street_surfaces", "street_corners"):
+scenes = [("real", "kitti_surfaces"), ("real", "kitti_corners"), ("real", "kitti_dense"),
+          ("simulated", "sim_surfaces"), ("simulated", "sim_corners"),
+          ("synthetic", "street_surfaces"), ("synthetic", "street_corners")]
+for kind, scene in scenes:
     nk, nc, ref = (cpu_ms(f"{a}/{scene}") for a in ("NearestK", "NormalConsistency", "NormalConsistencyReference"))
     if nk is None or nc is None:
         continue
@@ -39,6 +46,12 @@ for scene in ("kitti_surfaces", "kitti_corners", "kitti_dense", "street_surfaces
     r2 = ref / nc if ref is not None else float("nan")
     ok = ok and r1 <= 2.0 and (ref is None or r2 >= 10.0)
     ref_s = f"{ref:14.2f}" if ref is not None else f"{'-':>14}"
-    print(f"{scene:<18}{nk:13.2f}{nc:16.2f}{ref_s}{r1:13.2f}{r2:9.1f}")
+    print(f"{kind:<10}{scene:<18}{nk:13.2f}{nc:16.2f}{ref_s}{r1:13.2f}{r2:9.1f}")
 print("targets: NC/NearestK <= 2.0 (stretch 1.5), Ref/NC >= 10 ->", "met" if ok else "NOT met")
 PY
+
+if [[ "${NO_GN:-0}" != 1 ]]; then
+  echo
+  echo "Gauss-Newton iteration, accumulation and search-structure builds (real KITTI pair)"
+  "$BUILD_DIR/bench/bench_gauss_newton"
+fi

@@ -1,6 +1,7 @@
 // Association kernel benchmarks: NearestK vs NormalConsistency vs the literal
 // NormalConsistencyReference, on a real KITTI scan (000001) against a local
-// map built from the neighbouring real scan (000000), and on the synthetic
+// map built from the neighbouring real scan (000000), on two consecutive
+// simulated urban sweeps (semlio::sim, in memory) and on the synthetic
 // street; plus the per-frame preparation, the local-map build, and residual +
 // Jacobian accumulation into 6x6 normal equations. Items = scan features.
 // scripts/bench_association.sh runs this and prints the ratios.
@@ -21,6 +22,7 @@
 #include <semlio/residual/robust.hpp>
 #include <semlio/residual/semantic_weighted.hpp>
 #include <semlio_test/associate_scenes.hpp>
+#include <semlio_test/frontend_sim_pair.hpp>
 
 namespace {
 
@@ -84,6 +86,24 @@ const Problem& street() {
   return p;
 }
 
+// LOAM features of simulated urban frame 11 against a local map of frame 10
+// (ground-truth relative pose).
+const Problem& sim() {
+  static const Problem p = [] {
+    Problem q;
+    const auto pair = semlio_test::sim_urban_pair();
+    q.map.add_keyframe(SE3d(), pair.map_features.corners, pair.map_features.surfaces);
+    q.map.build(Eigen::Vector3d::Zero());
+    q.surfaces = pair.scan_features.surfaces.points;
+    q.surface_labels = pair.scan_features.surfaces.labels;
+    if (q.surface_labels.size() != q.surfaces.size()) q.surface_labels.assign(q.surfaces.size(), semlio::Class::kUnlabeled);
+    q.corners = pair.scan_features.corners.points;
+    q.T_map_scan = pair.T_map_scan;
+    return q;
+  }();
+  return p;
+}
+
 enum class Kind { kSurfaces, kCorners };
 
 // Times associate() alone: per Gauss-Newton iteration cost. set_scan() (per
@@ -120,21 +140,25 @@ void BM_Prepare(benchmark::State& state, const Problem* (*problem)()) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(p.surfaces.size()));
 }
 
-// Local map build from one keyframe (transform, voxelise, tree, cached axes
-// and candidate lists): LOAM features, or every point (dense).
+// Local map build from one keyframe, from scratch (store the keyframe,
+// transform, voxelise, tree, cached axes and candidate lists): LOAM features,
+// or every point (dense). A fresh LocalMap per iteration, because build() is
+// incremental and does nothing when the keyframe set is unchanged.
 void BM_LocalMapBuild(benchmark::State& state, bool dense) {
-  semlio::LocalMap map;
-  std::size_t points = 0;
+  semlio_test::FeatureCloud corners;
+  semlio_test::FeatureCloud surfaces;
   if (dense) {
-    const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.2);
-    map.add_keyframe(SE3d(), cloud, cloud);
-    points = 2 * cloud.points.size();
+    corners = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.2);
+    surfaces = corners;
   } else {
     const auto f = semlio_test::kitti_features("kitti/sequences/00/velodyne/000000.bin");
-    map.add_keyframe(SE3d(), f.corners, f.surfaces);
-    points = f.corners.points.size() + f.surfaces.points.size();
+    corners = f.corners;
+    surfaces = f.surfaces;
   }
+  const std::size_t points = corners.points.size() + surfaces.points.size();
   for (auto _ : state) {
+    semlio::LocalMap map;
+    map.add_keyframe(SE3d(), corners, surfaces);
     map.build(Eigen::Vector3d::Zero());
     benchmark::DoNotOptimize(map.surfaces().axes().data());
   }
@@ -179,6 +203,7 @@ void BM_Accumulate(benchmark::State& state) {
 const Problem* kitti_ptr() { return &kitti(); }
 const Problem* kitti_dense_ptr() { return &kitti_dense(); }
 const Problem* street_ptr() { return &street(); }
+const Problem* sim_ptr() { return &sim(); }
 
 void register_associators(const std::string& scene, const Problem* (*problem)(), Kind kind, bool reference) {
   benchmark::RegisterBenchmark(("NearestK/" + scene).c_str(), BM_Associate<semlio::NearestK>, problem, kind)
@@ -199,6 +224,8 @@ int main(int argc, char** argv) {
   register_associators("kitti_surfaces", kitti_ptr, Kind::kSurfaces, true);
   register_associators("kitti_corners", kitti_ptr, Kind::kCorners, true);
   register_associators("kitti_dense", kitti_dense_ptr, Kind::kSurfaces, true);
+  register_associators("sim_surfaces", sim_ptr, Kind::kSurfaces, true);
+  register_associators("sim_corners", sim_ptr, Kind::kCorners, true);
   register_associators("street_surfaces", street_ptr, Kind::kSurfaces, true);
   register_associators("street_corners", street_ptr, Kind::kCorners, true);
   benchmark::RegisterBenchmark("NormalConsistencyPrepare/kitti_surfaces", BM_Prepare, kitti_ptr)

@@ -5,14 +5,18 @@
 //   semlio_register --source A --target B [--init x,y,z,roll,pitch,yaw]
 //                   [--associator nearest|normal] [--semantic on|off]
 //                   [--sensor hdl64e|hdl32e] [--kitti-correction on|off]
+//                   [--ring-check DEG]
 // Scans: KITTI .bin (labels from a .label of the same name in ../labels/ are
-// not read), .pcd or .ply. Angles in radians.
+// not read), .pcd or .ply. Angles in radians, except --ring-check: the
+// PointToLine ring-crossing check (point_to_line.hpp) in degrees, 0 = off
+// (default; 20 removes the corner bias measured on KITTI).
 
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -66,6 +70,7 @@ int main(int argc, char** argv) {
   std::string semantic = "on";
   std::string sensor = "hdl64e";
   std::string correction = "off";
+  double ring_check_deg = 0.0;
   CLI::App app{"semlio_register: scan-to-scan registration with semlio's front end"};
   app.add_option("--source", source_path, "scan to move (.bin, .pcd, .ply)")->required();
   app.add_option("--target", target_path, "reference scan (.bin, .pcd, .ply)")->required();
@@ -76,6 +81,8 @@ int main(int argc, char** argv) {
   app.add_option("--sensor", sensor, "beam table for ring inference")->check(CLI::IsMember({"hdl64e", "hdl32e"}));
   app.add_option("--kitti-correction", correction, "KITTI 0.205 deg vertical-angle fix")
       ->check(CLI::IsMember({"on", "off"}));
+  app.add_option("--ring-check", ring_check_deg, "corner lines within this angle of the scan cone are dropped [deg], 0 = off")
+      ->check(CLI::Range(0.0, 89.0));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -88,8 +95,9 @@ int main(int argc, char** argv) {
     semlio::RegistrationConfig config;
     config.sensor = sensor == "hdl32e" ? semlio::SensorModel::hdl32e() : semlio::SensorModel::hdl64e();
     config.kitti_vertical_correction = correction == "on";
-    const semlio::LoamResiduals plain{semlio::PointToLine{}, semlio::PointToPlane{}};
-    const semlio::LoamResiduals weighted{semlio::SemanticWeighted<semlio::PointToLine>{},
+    const semlio::PointToLine line({.min_cone_angle_rad = ring_check_deg * std::numbers::pi / 180.0});
+    const semlio::LoamResiduals plain{line, semlio::PointToPlane{}};
+    const semlio::LoamResiduals weighted{semlio::SemanticWeighted<semlio::PointToLine>(line),
                                          semlio::SemanticWeighted<semlio::PointToPlane>{}};
     semlio::RegistrationResult r;
     if (associator == "nearest") {

@@ -202,6 +202,33 @@ TEST_CASE("Point-to-line distance equals eq. 8 by hand", "[residual]") {
   }
 }
 
+TEST_CASE("Point-to-line ring-crossing check rejects lines lying in the feature's scan cone", "[residual]") {
+  // A ground feature 10 m ahead, 1.73 m below the sensor: its beam's cone
+  // contains the horizontal ring tangent (y) and the beam itself.
+  const FeaturePoint f{{10.0, 0.0, -1.73}, Class::kRoad};
+  const SE3d I;
+  const MatchedPoints along_ring = make_matches({{10.0, -0.4, -1.73}, {10.0, 0.0, -1.73}, {10.0, 0.4, -1.73}}, {});
+  const Eigen::Vector3d beam = f.p_scan.normalized();
+  const MatchedPoints along_beam = make_matches({f.p_scan - 0.5 * beam, f.p_scan, f.p_scan + 0.5 * beam}, {});
+  const MatchedPoints vertical = make_matches({{10.0, 0.1, -1.9}, {10.0, 0.1, -1.5}, {10.0, 0.1, -1.1}}, {});
+  const semlio::PointToLine off{};
+  const semlio::PointToLine on({.min_cone_angle_rad = 20.0 * 3.14159265358979 / 180.0});
+  CHECK(off.evaluate(f, along_ring, I).valid);
+  CHECK(off.evaluate(f, along_beam, I).valid);
+  CHECK_FALSE(on.evaluate(f, along_ring, I).valid);
+  CHECK_FALSE(on.evaluate(f, along_beam, I).valid);
+  REQUIRE(on.evaluate(f, vertical, I).valid);
+  CHECK(on.evaluate(f, vertical, I).r.norm() == Approx(0.1));
+  // The test runs in the scan frame: rotating the map by T leaves the decision unchanged.
+  const SE3d T(semlio::SO3d::exp(Eigen::Vector3d(0.1, -0.2, 0.7)), Eigen::Vector3d(3.0, -1.0, 0.5));
+  MatchedPoints moved = along_ring;
+  for (int k = 0; k < moved.count; ++k) moved.p_map[static_cast<std::size_t>(k)] = T * along_ring.p_map[static_cast<std::size_t>(k)];
+  CHECK_FALSE(on.evaluate(f, moved, T).valid);
+  // Undefined cone (feature on the sensor's z axis): no residual, never NaN.
+  const FeaturePoint up{{0.0, 0.0, 2.0}, Class::kPole};
+  CHECK_FALSE(on.evaluate(up, vertical, I).valid);
+}
+
 TEST_CASE("Semantic weight scales residual and Jacobian (eq. 10-12)", "[residual]") {
   // 3 of 5 matches share the feature's label: w = 3/5 (eq. 10-11).
   const std::vector<Class> labels{Class::kPole, Class::kPole, Class::kBuilding, Class::kPole, Class::kVegetation};
