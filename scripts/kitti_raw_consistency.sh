@@ -1,17 +1,33 @@
 #!/usr/bin/env bash
 # Self-consistency of the odometry on a real KITTI raw snippet (no ground
 # truth): runs semlio_kitti forward and backward over a folder of PCD scans
-# (e.g. the 22-frame KITTI raw snippet) and checks smooth forward motion, no
-# jumps, and agreement of the forward and backward relative motions.
-#   scripts/kitti_raw_consistency.sh PCD_DIR [PRESET]
-# The scans are used as recorded: KITTI raw sweeps are not motion-compensated
-# and semlio_kitti does not deskew yet, so forward and backward runs see the
-# in-sweep distortion with opposite signs; the fwd/bwd gap measures that.
+# (e.g. the 22-frame KITTI raw snippet), with and without deskew, for each
+# preset, and checks smooth forward motion, no jumps, and agreement of the
+# forward and backward relative motions (< 5 cm per step).
+#   scripts/kitti_raw_consistency.sh PCD_DIR [PRESETS] [DESKEW]
+#     PRESETS: "baseline full" (default), "baseline" or "full"
+#     DESKEW:  "off on" (default), "off" or "on"
+# Environment: BUILD_DIR (default build); SEMLIO_KITTI (default
+# $BUILD_DIR/examples/semlio_kitti) to run another semlio_kitti binary.
+#
+# KITTI raw sweeps are not motion-compensated. Deskew (imu/deskew.hpp,
+# SweepDeskew) is switched on through a --config YAML file:
+#   forward:  deskew: {mode: constant_velocity, point_times: azimuth}
+#   backward: the same plus reverse_time: true. The backward run plays the
+#   scans in reverse order, but each sweep was still recorded forward in time:
+#   seen in reversed time it spins the other way, so the per-point times are
+#   reversed (t -> period - t). With the backward (negated) predicted motion
+#   the correction is then the same as forward; without it the backward run
+#   would double the distortion.
+# The time convention (clockwise, sweep seam facing forward) is KITTI raw's
+# as measured in features/rings.hpp.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-IN=${1:?usage: scripts/kitti_raw_consistency.sh PCD_DIR [baseline|full]}
-PRESET=${2:-full}
+IN=${1:?usage: scripts/kitti_raw_consistency.sh PCD_DIR [PRESETS] [DESKEW]}
+PRESETS=${2:-baseline full}
+DESKEWS=${3:-off on}
 BUILD_DIR=${BUILD_DIR:-build}
+KITTI_BIN=${SEMLIO_KITTI:-$BUILD_DIR/examples/semlio_kitti}
 OUT=results/kitti_raw_consistency
 scripts/install_deps.sh python3-numpy
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
@@ -25,10 +41,31 @@ for i in "${!files[@]}"; do
 done
 for d in fwd bwd; do
   /usr/bin/python3 -c "import sys; [print(f'{0.1*i:.6f}') for i in range($n)]" > "$OUT/$d/times.txt"
-  "$BUILD_DIR/examples/semlio_kitti" --sequence "$OUT/$d" --labels none --preset "$PRESET" \
-    --kitti-correction on --out "$OUT/run_$d" --quiet
 done
-/usr/bin/python3 - "$OUT/run_fwd/poses_tum.txt" "$OUT/run_bwd/poses_tum.txt" <<'PY'
+printf 'deskew:\n  mode: none\n' > "$OUT/off_fwd.yaml"
+cp "$OUT/off_fwd.yaml" "$OUT/off_bwd.yaml"
+printf 'deskew:\n  mode: constant_velocity\n  point_times: azimuth\n' > "$OUT/on_fwd.yaml"
+printf 'deskew:\n  mode: constant_velocity\n  point_times: azimuth\n  reverse_time: true\n' > "$OUT/on_bwd.yaml"
+
+status=0
+for preset in $PRESETS; do
+  for deskew in $DESKEWS; do
+    tag="${preset}_deskew_${deskew}"
+    ok=1
+    for d in fwd bwd; do
+      if ! "$KITTI_BIN" --sequence "$OUT/$d" --labels none --preset "$preset" --kitti-correction on \
+          --config "$OUT/${deskew}_${d}.yaml" --out "$OUT/run_${tag}_$d" --quiet > "$OUT/run_${tag}_$d.log" 2>&1; then
+        echo "$tag: semlio_kitti failed ($d), see $OUT/run_${tag}_$d.log:"
+        tail -n 3 "$OUT/run_${tag}_$d.log"
+        if grep -q "deskew" "$OUT/run_${tag}_$d.log"; then
+          echo "  (semlio_kitti must read the config's deskew: section: semlio_examples::load_deskew_yaml in examples/common/deskew_yaml.hpp)"
+        fi
+        ok=0
+        break
+      fi
+    done
+    if [ "$ok" -eq 0 ]; then status=1; continue; fi
+    /usr/bin/python3 - "$tag" "$OUT/run_${tag}_fwd/poses_tum.txt" "$OUT/run_${tag}_bwd/poses_tum.txt" <<'PY' || status=1
 import sys
 import numpy as np
 def load(p):
@@ -41,7 +78,8 @@ def load(p):
                       [2*(qx*qz-qy*qw), 2*(qy*qz+qx*qw), 1-2*(qx*qx+qy*qy)]])
         M = np.eye(4); M[:3, :3] = R; M[:3, 3] = [x, y, z]; T.append(M)
     return T
-fwd, bwd = load(sys.argv[1]), load(sys.argv[2])
+tag = sys.argv[1]
+fwd, bwd = load(sys.argv[2]), load(sys.argv[3])
 n = len(fwd)
 step_f = [np.linalg.inv(fwd[i]) @ fwd[i + 1] for i in range(n - 1)]
 # backward frame j is forward frame n-1-j: the backward step j -> j+1 is the
@@ -51,12 +89,16 @@ d = np.array([np.linalg.norm(s[:3, 3]) for s in step_f])
 fx = np.array([s[0, 3] for s in step_f])
 diff = np.array([np.linalg.norm(a[:3, 3] - b[:3, 3]) for a, b in zip(step_f, step_b)])
 ang = np.array([np.degrees(np.arccos(np.clip((np.trace(a[:3, :3].T @ b[:3, :3]) - 1) / 2, -1, 1))) for a, b in zip(step_f, step_b)])
-total = np.linalg.norm(fwd[-1][:3, 3])
-print(f"frames {n}, forward distance {total:.2f} m")
-print(f"step length [m]: min {d.min():.3f} median {np.median(d):.3f} max {d.max():.3f} (forward x component min {fx.min():.3f})")
-print(f"largest step change between consecutive frames: {np.abs(np.diff(d)).max():.3f} m")
-print(f"forward vs backward step: translation max {diff.max()*100:.2f} cm (mean {diff.mean()*100:.2f} cm), rotation max {ang.max():.3f} deg")
-ok = fx.min() > 0.5 and np.abs(np.diff(d)).max() < 0.1 and diff.max() < 0.05
-print("consistent" if ok else "NOT consistent (thresholds: forward step > 0.5 m, step change < 0.1 m, fwd/bwd < 5 cm)")
+jump = np.abs(np.diff(d)).max()
+ok = fx.min() > 0.5 and jump < 0.1 and diff.max() < 0.05
+print(f"{tag}: {n} frames, {np.linalg.norm(fwd[-1][:3, 3]):.2f} m; step [m] min {d.min():.3f} median {np.median(d):.3f} "
+      f"max {d.max():.3f} (forward x min {fx.min():.3f}); largest step change {jump:.3f} m; "
+      f"fwd/bwd step difference mean {diff.mean()*100:.2f} cm max {diff.max()*100:.2f} cm, rotation max {ang.max():.3f} deg"
+      f" -> {'consistent' if ok else 'NOT consistent'}")
+print("  fwd/bwd per step [cm]: " + " ".join(f"{x*100:.1f}" for x in diff))
 sys.exit(0 if ok else 1)
 PY
+  done
+done
+echo "thresholds: forward step > 0.5 m, step change < 0.1 m, fwd/bwd < 5 cm on every step"
+exit $status

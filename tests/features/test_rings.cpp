@@ -203,12 +203,27 @@ TEST_CASE("per-point time from azimuth", "[features]") {
     scan.points.emplace_back(static_cast<float>(std::cos(az_deg * kDeg)),
                              static_cast<float>(std::sin(az_deg * kDeg)), 0.0F);
   }
-  SECTION("KITTI default: counter-clockwise from the front, 10 Hz") {
+  SECTION("KITTI raw default: clockwise from the front, 10 Hz") {
     semlio::assign_times_from_azimuth(scan);
     REQUIRE(scan.times_s.size() == 5);
     CHECK(scan.times_s[0] == Approx(0.0).margin(1e-7));
-    CHECK(scan.times_s[1] == Approx(0.025));
+    CHECK(scan.times_s[1] == Approx(0.075));  // +90 deg (left) is reached after three quarters
     CHECK(scan.times_s[2] == Approx(0.05));
+    CHECK(scan.times_s[3] == Approx(0.025));  // right side after a quarter
+    CHECK(scan.times_s[4] == Approx(0.0125));  // -45 deg
+  }
+  SECTION("the simulator: clockwise from the rear") {
+    semlio::assign_times_from_azimuth(scan, {.start_azimuth_rad = 180.0 * kDeg});
+    CHECK(scan.times_s[2] == Approx(0.0).margin(1e-7));
+    CHECK(scan.times_s[1] == Approx(0.025));
+    CHECK(scan.times_s[0] == Approx(0.05));
+    CHECK(scan.times_s[3] == Approx(0.075));
+    CHECK(scan.times_s[4] == Approx(0.0625));
+  }
+  SECTION("counter-clockwise from the front") {
+    semlio::assign_times_from_azimuth(scan, {.counter_clockwise = true});
+    CHECK(scan.times_s[0] == Approx(0.0).margin(1e-7));
+    CHECK(scan.times_s[1] == Approx(0.025));
     CHECK(scan.times_s[3] == Approx(0.075));
     CHECK(scan.times_s[4] == Approx(0.0875));
   }
@@ -225,19 +240,21 @@ TEST_CASE("per-point time from azimuth", "[features]") {
   CHECK_THROWS_AS(semlio::assign_times_from_azimuth(scan, {.sweep_period_s = 0.0}), semlio::ConfigError);
 }
 
-TEST_CASE("per-point times on the real KITTI scan follow the point order", "[features]") {
+TEST_CASE("per-point times on the real KITTI scan run against the point order", "[features]") {
+  // Each ring is stored counter-clockwise from the front while the sensor
+  // spins clockwise (see rings.hpp), so within a ring time decreases.
   semlio::Scan scan = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
   semlio::infer_rings(scan, semlio::SensorModel::hdl64e());
   semlio::assign_times_from_azimuth(scan);
-  std::size_t increasing = 0;
+  std::size_t decreasing = 0;
   std::size_t steps = 0;
   for (std::size_t i = 1; i < scan.size(); ++i) {
     CHECK((scan.times_s[i] >= 0.0F && scan.times_s[i] < 0.1F));
     if (scan.rings[i] != scan.rings[i - 1]) continue;
     ++steps;
-    if (scan.times_s[i] >= scan.times_s[i - 1]) ++increasing;
+    if (scan.times_s[i] <= scan.times_s[i - 1]) ++decreasing;
   }
-  CHECK(static_cast<double>(increasing) > 0.99 * static_cast<double>(steps));
+  CHECK(static_cast<double>(decreasing) > 0.99 * static_cast<double>(steps));
 }
 
 TEST_CASE("KITTI vertical-angle correction rotates by 0.205 deg about the horizontal axis", "[features]") {

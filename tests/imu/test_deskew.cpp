@@ -119,6 +119,16 @@ TEST_CASE("constant-velocity deskew undoes a constant-twist sweep", "[imu]") {
     ConstantVelocityDeskew({.target = DeskewTarget::kEnd}).deskew(scan, T_prev_current);
     CHECK(max_error(scan, s, pose(0.1)) < 1e-4);
   }
+  SECTION("to the middle of the sweep") {
+    Scan scan = s.distorted;
+    ConstantVelocityDeskew({.target = DeskewTarget::kMiddle}).deskew(scan, T_prev_current);
+    CHECK(max_error(scan, s, pose(0.05)) < 1e-4);
+    ImuDeskew imu_mid({.target = DeskewTarget::kMiddle});
+    imu_mid.set_imu(constant_gyro(xi.tail<3>(), SE3d(), 99.98, 100.13, 100.0));
+    Scan by_imu = s.distorted;
+    imu_mid.deskew(by_imu, T_prev_current);
+    CHECK(max_error(by_imu, s, pose(0.05)) < 1e-3);
+  }
   SECTION("sweep shorter than the frame period") {
     const Sweep half = make_sweep(pose, 0.05, 100.0);
     Scan scan = half.distorted;
@@ -373,4 +383,33 @@ TEST_CASE("deskew rejects bad input with typed errors", "[imu]") {
     CHECK(scan.intensity.size() == scan.size());
     CHECK(max_error(scan, s, SE3d()) < 1e-3);
   }
+}
+
+TEST_CASE("poses_at_sweep_start re-times a constant-velocity trajectory exactly", "[imu]") {
+  const SE3d T0(SO3d::exp(Eigen::Vector3d(0.0, 0.0, 0.4)), Eigen::Vector3d(1.0, 2.0, 0.0));
+  const SE3d::Vector6 xi = fast_turn();
+  const PoseAt pose = screw(T0, xi);
+  std::vector<SE3d> starts;
+  std::vector<SE3d> mids;
+  std::vector<SE3d> ends;
+  std::vector<double> stamps;
+  for (const double t : {0.0, 0.1, 0.2, 0.4, 0.5}) {  // one frame skipped: the span comes from the stamps
+    stamps.push_back(t);
+    starts.push_back(pose(t));
+    mids.push_back(pose(t + 0.05));
+    ends.push_back(pose(t + 0.1));
+  }
+  const auto worst = [&](const std::vector<SE3d>& got) {
+    double w = 0.0;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      w = std::max(w, (got[i].translation() - starts[i].translation()).norm());
+      w = std::max(w, (got[i].so3().inverse() * starts[i].so3()).angle());
+    }
+    return w;
+  };
+  CHECK(worst(mids) > 0.5);
+  CHECK(worst(semlio::poses_at_sweep_start(mids, stamps, DeskewTarget::kMiddle, 0.1)) < 1e-9);
+  CHECK(worst(semlio::poses_at_sweep_start(ends, stamps, DeskewTarget::kEnd, 0.1)) < 1e-9);
+  CHECK(worst(semlio::poses_at_sweep_start(starts, stamps, DeskewTarget::kStart, 0.1)) == 0.0);
+  CHECK_THROWS_AS(semlio::poses_at_sweep_start(mids, {0.0}, DeskewTarget::kMiddle, 0.1), semlio::ValueError);
 }

@@ -1,2 +1,3 @@
 # Deskew wired into the pipeline (KITTI raw, distorted simulated sweeps).
-set(SEMLIO_TESTS_pipeline_deskew)
+set(SEMLIO_TESTS_pipeline_deskew
+  pipeline/test_deskew_pipeline.cpp)

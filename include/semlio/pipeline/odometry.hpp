@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <concepts>
 #include <cstddef>
 #include <optional>
 #include <utility>
@@ -253,6 +254,19 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     report.keyframe = keyframe_policy_.is_keyframe(evidence);
     report.timings.keyframe_ms = ms_since(t);
 
+    // Deskewing needs a velocity, so the first two frames entered the map as
+    // measured (distorted), which biases everything tracked against them.
+    // Once a deskewed frame is tracked, restart the map from it.
+    if constexpr (requires(const D& d) {
+                    { d.active() } -> std::convertible_to<bool>;
+                  }) {
+      if (reanchor_pending_ && processed_ >= 2 && deskewer_.active()) {
+        map_ = LocalMap(config_.map);
+        report.keyframe = true;
+        reanchor_pending_ = false;
+      }
+    }
+
     // 9. Map update, on keyframes only.
     if (report.keyframe) {
       t = Clock::now();
@@ -328,6 +342,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
   double lastkf_stamp_s_ = 0.0;
   std::size_t frame_count_ = 0;
   std::size_t processed_ = 0;
+  bool reanchor_pending_ = true;  // see step 9: restart the map once deskew has a velocity
 };
 
 /// Deduction guides: policies by value.
