@@ -1,7 +1,9 @@
-// semlio_kitti: runs the odometry on a KITTI-layout sequence directory (real
-// KITTI odometry / SemanticKITTI, or a semlio_simulate drive) and writes the
-// trajectory, keyframes and a JSON report; evaluates against ground truth when
-// one is found. See the README ("semlio_kitti") for options and outputs.
+// semlio_kitti: runs the odometry (and optionally the back end: pose graph +
+// loop closure) on a KITTI-layout sequence directory (real KITTI odometry /
+// SemanticKITTI, or a semlio_simulate drive) and writes the trajectory
+// (optimised and odometry-only), keyframes, the semantic map and a JSON
+// report; evaluates against ground truth when one is found. See the README
+// ("semlio_kitti") for options and outputs.
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -13,17 +15,21 @@
 #include <fstream>
 #include <iostream>
 #include <numeric>
+#include <numbers>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <semlio/eval/ate.hpp>
 #include <semlio/eval/kitti_metric.hpp>
 #include <semlio/io/kitti.hpp>
 #include <semlio/io/kitti_sequence.hpp>
+#include <semlio/io/ply.hpp>
 #include <semlio/io/trajectory.hpp>
 #include <semlio/pipeline/interpolate.hpp>
 #include <semlio/pipeline/presets.hpp>
+#include <semlio/pipeline/slam.hpp>
 #include <semlio/segment/geometric_segmenter.hpp>
 #include <semlio/segment/scan_labels.hpp>
 
@@ -47,13 +53,61 @@ struct Options {
   long last = -1;
   std::string out;
   bool quiet = false;
+  std::string loop;           // on|off; empty = the YAML's slam.loop_closure (default off)
+  std::string loop_detector;  // radius|scancontext; empty = the YAML's (default radius)
+  bool map_static = false;    // drop movable classes from map.ply
+  std::string map = "on";     // write map.ply
+};
+
+// Either shipped loop detector behind one type, so that each front end is
+// instantiated once (the detector is chosen at run time).
+struct AnyLoopDetector {
+  std::variant<semlio::RadiusLoopDetector, semlio::ScanContextDetector> detector;
+  void detect(const std::vector<semlio::LoopKeyframe>& keyframes, std::vector<semlio::LoopCandidate>& out) {
+    std::visit([&](auto& d) { d.detect(keyframes, out); }, detector);
+  }
+};
+static_assert(semlio::LoopDetector<AnyLoopDetector>);
+
+// Per-frame back-end facts kept for the report.
+struct BackEndFrame {
+  bool loop_checked = false;
+  bool loop_closed = false;
+  double backend_ms = 0.0;
+  double total_ms = 0.0;
 };
 
 struct RunResult {
   std::vector<semlio::FrameReport> reports;
+  std::vector<BackEndFrame> back_end;
   semlio::RankHistogram ranks{};
   double wall_s = 0.0;
+  std::vector<SE3d> optimised;  // one per frame, world (graph) frame
+  std::vector<SE3d> odometry;   // one per frame, odometry only
+  std::vector<semlio::SlamLoop> loops;
+  semlio::LoopStats loop_stats;
+  double graph_ms = 0.0;
+  double graph_full_ms = 0.0;
+  std::size_t graph_nodes = 0;
+  std::size_t graph_factors = 0;
+  std::size_t keyframe_bytes = 0;
+  semlio::Scan map;
 };
+
+// Peak resident set size [kB] from /proc/self/status (VmHWM); 0 when unknown.
+long peak_rss_kb() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "VmHWM:") {
+      long kb = 0;
+      status >> kb;
+      return kb;
+    }
+    status.ignore(4096, '\n');
+  }
+  return 0;
+}
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -65,16 +119,23 @@ double percentile(std::vector<double> v, double q) {
 }
 
 template <typename Odometry>
-RunResult run(Odometry odom, const semlio::io::KittiSequence& seq, std::size_t first, std::size_t last,
-              bool quiet) {
+RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool write_map,
+              const semlio::io::KittiSequence& seq, std::size_t first, std::size_t last, bool quiet) {
   RunResult result;
   const std::size_t n = last - first + 1;
   result.reports.reserve(n);
+  result.back_end.reserve(n);
+  AnyLoopDetector detector{be.loop_detector == "scancontext"
+                               ? decltype(AnyLoopDetector::detector)(semlio::ScanContextDetector(be.scan_context))
+                               : decltype(AnyLoopDetector::detector)(semlio::RadiusLoopDetector(be.radius))};
+  semlio::Slam slam(std::move(odom), std::move(detector), be.slam);
   const bool tty = !quiet && isatty(STDERR_FILENO) != 0;
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t i = first; i <= last; ++i) {
     semlio::Scan scan = seq.read(i);
-    result.reports.push_back(odom.process(scan));
+    const semlio::SlamFrameReport r = slam.process(scan);
+    result.reports.push_back(r.odometry);
+    result.back_end.push_back({r.loop_checked, r.loop_closed, r.backend_ms, r.total_ms});
     const std::size_t done = i - first + 1;
     if (tty && (done % 5 == 0 || done == n)) {
       const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -85,7 +146,17 @@ RunResult run(Odometry odom, const semlio::io::KittiSequence& seq, std::size_t f
   }
   if (tty) std::fprintf(stderr, "\n");
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  result.ranks = odom.rank_histogram();
+  result.ranks = slam.odometry().rank_histogram();
+  result.optimised = slam.trajectory();
+  result.odometry = slam.odometry_trajectory();
+  result.loops = slam.loops();
+  result.loop_stats = slam.loop_stats();
+  result.graph_ms = slam.graph_ms();
+  result.graph_full_ms = slam.graph_full_ms();
+  result.graph_nodes = slam.graph().num_nodes();
+  result.graph_factors = slam.graph().num_factors();
+  result.keyframe_bytes = slam.keyframe_bytes();
+  if (write_map) result.map = slam.semantic_map(be.map);
   return result;
 }
 
@@ -100,7 +171,13 @@ void write_timings(semlio_examples::JsonWriter& j, const semlio::StageTimings& t
 
 int main(int argc, char** argv) {
   Options opt;
-  CLI::App app{"semlio_kitti: semantic lidar odometry on a KITTI-layout sequence"};
+  CLI::App app{"semlio_kitti: semantic lidar odometry (with --loop on: + pose graph and loop closure) on a "
+               "KITTI-layout sequence"};
+  app.footer(
+      "Outputs in OUT/: poses.txt (one pose per frame; the loop-closed trajectory with --loop on, else the odometry),\n"
+      "poses_odom.txt (odometry only), poses_tum.txt (poses.txt in TUM format, lidar frame), keyframes.txt,\n"
+      "map.ply (semantic map: keyframe clouds at their optimised poses, 0.3 m voxels, majority label,\n"
+      "SemanticKITTI colours) and report.json (statistics, loops, memory, evaluation when ground truth is found).");
   app.add_option("--sequence", opt.sequence, "sequence directory (velodyne/, labels/, calib.txt, times.txt)")
       ->required();
   app.add_option("--gt", opt.gt, "ground-truth poses (KITTI format); default: discover");
@@ -116,6 +193,14 @@ int main(int argc, char** argv) {
   app.add_option("--last", opt.last, "last frame (inclusive; default: the last)");
   app.add_option("--out", opt.out, "output directory")->required();
   app.add_flag("--quiet", opt.quiet, "no progress line");
+  app.add_option("--loop", opt.loop,
+                 "loop closure + pose graph (default off: poses.txt is then the odometry; YAML slam.loop_closure)")
+      ->check(CLI::IsMember({"on", "off"}));
+  app.add_option("--loop-detector", opt.loop_detector, "loop candidates: radius (LIO-SAM, default) or scancontext")
+      ->check(CLI::IsMember({"radius", "scancontext"}));
+  app.add_option("--map", opt.map, "write OUT/map.ply, the semantic map (default on)")
+      ->check(CLI::IsMember({"on", "off"}));
+  app.add_flag("--map-static", opt.map_static, "leave movable classes (cars, people, ...) out of map.ply");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -152,7 +237,21 @@ int main(int argc, char** argv) {
     semlio::PipelineSettings settings;
     settings.odometry.kitti_vertical_correction =
         opt.kitti_correction == "auto" ? !simulated : opt.kitti_correction == "on";
-    if (!opt.config.empty()) semlio_examples::load_settings_yaml(opt.config, settings);
+    // The simulator's sweeps start facing backwards (KITTI raw: forwards); both
+    // spin clockwise. Only used when deskew is switched on in the YAML.
+    if (simulated) settings.deskew.start_azimuth_rad = std::numbers::pi;
+    semlio_examples::BackEndSettings back_end;
+    back_end.slam.loop_closure = false;  // semlio_kitti's default: the odometry comparison is the main job
+    if (!opt.config.empty()) semlio_examples::load_settings_yaml(opt.config, settings, &back_end);
+    if (!opt.loop.empty()) back_end.slam.loop_closure = opt.loop == "on";
+    if (!opt.loop_detector.empty()) back_end.loop_detector = opt.loop_detector;
+    if (back_end.loop_detector != "radius" && back_end.loop_detector != "scancontext") {
+      throw semlio::ConfigError(opt.config + ": slam.loop_detector must be radius or scancontext, got '" +
+                                back_end.loop_detector + "'");
+    }
+    if (opt.map_static) back_end.map.drop_dynamic = true;
+    back_end.slam.validate();
+    const bool write_map = opt.map == "on";
     if (opt.kitti_correction != "auto") settings.odometry.kitti_vertical_correction = opt.kitti_correction == "on";
 
     RunResult result;
@@ -160,8 +259,10 @@ int main(int argc, char** argv) {
     const bool use_labels = geometric || (opt.labels != "none" && seq.has_labels());
     const auto run_preset = [&](auto segmenter) {
       return opt.preset == "baseline"
-                 ? run(semlio::make_baseline_odometry(segmenter, settings), seq, first, last_u, opt.quiet)
-                 : run(semlio::make_full_odometry(segmenter, settings), seq, first, last_u, opt.quiet);
+                 ? run(semlio::make_baseline_odometry(segmenter, settings), back_end, write_map, seq, first, last_u,
+                       opt.quiet)
+                 : run(semlio::make_full_odometry(segmenter, settings), back_end, write_map, seq, first, last_u,
+                       opt.quiet);
     };
     if (geometric) {
       result = run_preset(semlio::GeometricSegmenter{});
@@ -173,17 +274,25 @@ int main(int argc, char** argv) {
 
     // One pose per input frame: skipped frames are interpolated by stamp.
     const std::size_t n = result.reports.size();
-    std::vector<SE3d> poses(n);
+    std::vector<SE3d>& poses = result.optimised;
+    std::vector<SE3d>& poses_odom = result.odometry;
     std::vector<double> stamps(n);
     std::vector<bool> processed(n);
     std::vector<std::size_t> keyframes;
     for (std::size_t i = 0; i < n; ++i) {
-      poses[i] = result.reports[i].T_map_lidar;
       stamps[i] = result.reports[i].stamp_s;
       processed[i] = result.reports[i].status != semlio::OdometryStatus::kSkipped;
       if (result.reports[i].keyframe) keyframes.push_back(i);
     }
     semlio::fill_skipped_poses(poses, stamps, processed);
+    semlio::fill_skipped_poses(poses_odom, stamps, processed);
+    if (settings.deskew.mode != semlio::DeskewMode::kNone) {
+      // Deskewed frames are posed at their target time (default: mid-sweep);
+      // outputs keep the meaning stamps have everywhere else: the sweep start.
+      poses = semlio::poses_at_sweep_start(poses, stamps, settings.deskew.target, settings.deskew.sweep_period_s);
+      poses_odom =
+          semlio::poses_at_sweep_start(poses_odom, stamps, settings.deskew.target, settings.deskew.sweep_period_s);
+    }
 
     fs::create_directories(opt.out);
     const fs::path out(opt.out);
@@ -191,6 +300,9 @@ int main(int argc, char** argv) {
     std::vector<semlio::io::StampedPose> tum(n);
     for (std::size_t i = 0; i < n; ++i) tum[i] = {stamps[i], poses[i]};
     semlio::io::write_tum_trajectory((out / "poses_tum.txt").string(), tum);
+    semlio::io::write_kitti_poses((out / "poses_odom.txt").string(),
+                                  Tr ? semlio::io::lidar_to_camera(poses_odom, *Tr) : poses_odom);
+    if (write_map) semlio::io::write_ply((out / "map.ply").string(), result.map);
     {
       std::ofstream kf(out / "keyframes.txt");
       kf.precision(9);
@@ -200,6 +312,7 @@ int main(int argc, char** argv) {
     // Ground truth of the selected frames, re-based on the first one.
     std::optional<semlio::eval::AteReport> ate_all;
     std::optional<semlio::eval::AteReport> ate_kf;
+    std::optional<semlio::eval::AteReport> ate_odom;
     std::optional<semlio::eval::KittiMetricReport> kitti;
     if (seq.has_ground_truth()) {
       const std::vector<SE3d> gt_all = seq.ground_truth_lidar();
@@ -207,6 +320,7 @@ int main(int argc, char** argv) {
       const SE3d base = gt.front().inverse();
       for (auto& T : gt) T = base * T;
       ate_all = semlio::eval::ate(gt, poses);
+      ate_odom = semlio::eval::ate(gt, poses_odom);
       if (keyframes.size() >= 3) ate_kf = semlio::eval::ate(gt, poses, keyframes);
       kitti = Tr ? semlio::eval::kitti_metric(semlio::io::lidar_to_camera(gt, *Tr), semlio::io::lidar_to_camera(poses, *Tr))
                  : semlio::eval::kitti_metric(gt, poses);
@@ -214,10 +328,13 @@ int main(int argc, char** argv) {
 
     std::vector<double> totals;
     std::vector<std::size_t> status_counts(8, 0);
-    for (const auto& r : result.reports) {
-      if (r.status != semlio::OdometryStatus::kSkipped) totals.push_back(r.timings.total_ms);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& r = result.reports[i];
+      if (r.status != semlio::OdometryStatus::kSkipped) totals.push_back(result.back_end[i].total_ms);
       ++status_counts[static_cast<std::size_t>(r.status)];
     }
+    const long peak_kb = peak_rss_kb();
+    const bool loops_on = back_end.slam.loop_closure;
 
     {
       std::ofstream os(out / "report.json");
@@ -229,6 +346,7 @@ int main(int argc, char** argv) {
       j.field("frame", Tr ? "camera0" : "lidar");
       j.field("kitti_vertical_correction", settings.odometry.kitti_vertical_correction);
       j.field("keyframe_count", keyframes.size());
+      j.field("loop_closure", loops_on);
       j.field("wall_time_s", result.wall_s);
       j.key("frame_time_ms").begin_object();
       j.field("median", percentile(totals, 0.5)).field("p95", percentile(totals, 0.95));
@@ -251,11 +369,50 @@ int main(int argc, char** argv) {
         };
         ate_json("ate_all_frames", *ate_all);
         if (ate_kf) ate_json("ate_keyframes", *ate_kf);
+        ate_json("ate_all_frames_odometry", *ate_odom);
         j.key("kitti").begin_object();
         j.field("segments", kitti->segment_count).field("translation_error_pct", kitti->translation_error_pct);
         j.field("rotation_error_deg_per_m", kitti->rotation_error_deg_per_m);
         j.field("rotation_error_deg_per_100m", kitti->rotation_error_deg_per_100m).end_object();
         j.end_object();
+      }
+      j.key("loop").begin_object();
+      j.field("enabled", loops_on).field("detector", back_end.loop_detector);
+      const semlio::LoopStats& ls = result.loop_stats;
+      j.field("queries", ls.queries).field("candidates", ls.candidates).field("verified", ls.verified);
+      j.field("accepted", ls.accepted).field("rejected", ls.rejected());
+      j.key("rejected_by_reason").begin_object();
+      j.field("empty_submap", ls.rejected_empty).field("not_converged", ls.rejected_not_converged);
+      j.field("degenerate", ls.rejected_degenerate).field("poor_fitness", ls.rejected_fitness);
+      j.field("few_inliers", ls.rejected_inliers).field("large_correction", ls.rejected_correction).end_object();
+      j.field("detect_ms", ls.detect_ms).field("verify_ms", ls.verify_ms);
+      j.key("graph").begin_object();
+      j.field("nodes", result.graph_nodes).field("factors", result.graph_factors);
+      j.field("solve_ms_total", result.graph_ms).field("full_solve_ms_total", result.graph_full_ms).end_object();
+      j.key("loops").begin_array();
+      for (const semlio::SlamLoop& l : result.loops) {
+        j.begin_object();
+        j.field("from_frame", static_cast<long long>(first + l.from_frame));
+        j.field("to_frame", static_cast<long long>(first + l.to_frame));
+        j.field("from_keyframe", l.from_keyframe).field("to_keyframe", l.to_keyframe);
+        j.field("fitness_m", l.fitness_m).field("inlier_ratio", l.inlier_ratio).field("correction_m", l.correction_m);
+        j.field("solve_ms", l.solve_ms).field("solve_iterations", l.solve.iterations);
+        j.field("solve_status", semlio::to_string(l.solve.status));
+        j.field("chi2_before", l.solve.initial_chi2).field("chi2_after", l.solve.final_chi2);
+        j.end_object();
+      }
+      j.end_array();
+      j.end_object();
+      j.key("memory").begin_object();
+      j.field("peak_rss_mb", static_cast<double>(peak_kb) / 1024.0);
+      j.field("keyframe_store_mb", static_cast<double>(result.keyframe_bytes) / (1024.0 * 1024.0));
+      j.field("keyframe_store_bytes_per_keyframe",
+              keyframes.empty() ? 0.0 : static_cast<double>(result.keyframe_bytes) / static_cast<double>(keyframes.size()));
+      j.end_object();
+      if (write_map) {
+        j.key("map").begin_object();
+        j.field("points", result.map.size()).field("leaf_size_m", back_end.map.leaf_size_m);
+        j.field("static_only", back_end.map.drop_dynamic).end_object();
       }
       j.key("frames").begin_array();
       for (std::size_t i = 0; i < n; ++i) {
@@ -269,6 +426,8 @@ int main(int argc, char** argv) {
         j.field("degenerate_directions", r.solve.degenerate_directions);
         j.array_field("eigenvalues", std::vector<double>(r.solve.eigenvalues.data(), r.solve.eigenvalues.data() + 6));
         write_timings(j, r.timings);
+        j.field("backend_ms", result.back_end[i].backend_ms).field("total_ms", result.back_end[i].total_ms);
+        j.field("loop_checked", result.back_end[i].loop_checked).field("loop_closed", result.back_end[i].loop_closed);
         j.end_object();
       }
       j.end_array();
@@ -287,7 +446,15 @@ int main(int argc, char** argv) {
       if (status_counts[s] > 0) std::printf(" %s=%zu", semlio::to_string(static_cast<semlio::OdometryStatus>(s)), status_counts[s]);
     }
     std::printf("\n");
+    if (loops_on) {
+      std::printf("  loops               %zu accepted of %zu verified (%zu candidates, detector %s)\n",
+                  result.loop_stats.accepted, result.loop_stats.verified, result.loop_stats.candidates,
+                  back_end.loop_detector.c_str());
+    }
+    std::printf("  memory              peak RSS %.0f MB, keyframe store %.1f MB\n", static_cast<double>(peak_kb) / 1024.0,
+                static_cast<double>(result.keyframe_bytes) / (1024.0 * 1024.0));
     if (ate_all) {
+      if (loops_on) std::printf("  ATE RMSE [m]        %.3f odometry only\n", ate_odom->rmse_m);
       std::printf("  ATE RMSE [m]        %.3f all frames", ate_all->rmse_m);
       if (ate_kf) std::printf(", %.3f keyframes", ate_kf->rmse_m);
       std::printf("\n  KITTI metric        %.3f %%  %.4f deg/100m  (%zu segments)\n", kitti->translation_error_pct,
@@ -295,8 +462,8 @@ int main(int argc, char** argv) {
     } else {
       std::printf("  no ground truth found: not evaluated\n");
     }
-    std::printf("  wrote %s/{poses.txt,poses_tum.txt,keyframes.txt,report.json} (%s frame)\n", opt.out.c_str(),
-                Tr ? "camera-0" : "lidar");
+    std::printf("  wrote %s/{poses.txt,poses_odom.txt,poses_tum.txt,keyframes.txt,report.json%s} (%s frame)\n",
+                opt.out.c_str(), write_map ? ",map.ply" : "", Tr ? "camera-0" : "lidar");
     return 0;
   } catch (const semlio::Error& e) {
     std::cerr << "semlio_kitti: " << e.what() << "\n";

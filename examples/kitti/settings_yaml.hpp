@@ -1,16 +1,23 @@
 #pragma once
-// YAML overrides of semlio::PipelineSettings for semlio_kitti. Every key is
+// YAML overrides of semlio::PipelineSettings (front end) and BackEndSettings
+// (slam, loop_verify, radius_loop, scan_context, graph, semantic_map) for semlio_kitti. Every key is
 // optional; an unknown section or key is an error (typos must not be silently
 // ignored). The README lists every key with its default.
 
 #include <yaml-cpp/yaml.h>
+
+#include "deskew_yaml.hpp"
 
 #include <functional>
 #include <map>
 #include <string>
 
 #include <semlio/core/error.hpp>
+#include <semlio/loop/radius_detector.hpp>
+#include <semlio/loop/scan_context.hpp>
+#include <semlio/map/semantic_map.hpp>
 #include <semlio/pipeline/presets.hpp>
+#include <semlio/pipeline/slam.hpp>
 
 namespace semlio_examples {
 
@@ -42,9 +49,19 @@ inline void apply(const YAML::Node& section, const std::string& name, const Sett
 
 }  // namespace detail
 
-/// Applies the overrides in the YAML file at `path` to `s`. Throws
-/// semlio::ConfigError (unknown key, bad value) or semlio::IoError.
-inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings& s) {
+/// Back-end settings of semlio_kitti (pose graph, loop closure, semantic map).
+struct BackEndSettings {
+  semlio::SlamConfig slam{};                   ///< Slam (loop_closure is set from --loop)
+  std::string loop_detector = "radius";        ///< radius | scancontext
+  semlio::RadiusLoopConfig radius{};           ///< radius detector
+  semlio::ScanContextConfig scan_context{};    ///< Scan Context detector
+  semlio::SemanticMapConfig map{};             ///< OUT/map.ply
+};
+
+/// Applies the overrides in the YAML file at `path` to `s` and, when given,
+/// to the back-end settings `b`. Throws semlio::ConfigError (unknown key, bad
+/// value) or semlio::IoError.
+inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings& s, BackEndSettings* b = nullptr) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -114,11 +131,76 @@ inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings
         {"weight_min", set(s.semantic_keyframes.weight_min)},
         {"laplace_count", set(s.semantic_keyframes.laplace_count)}}},
   };
+  BackEndSettings unused;
+  BackEndSettings& be = b != nullptr ? *b : unused;
+  auto& sl = be.slam;
+  auto& lv = be.slam.loop.verify;
+  auto& g = be.slam.graph;
+  auto& sc = be.scan_context;
+  const std::map<std::string, detail::Setters> back_end = {
+      {"slam",
+       {{"loop_closure", set(sl.loop_closure)},
+        {"loop_detector", set(be.loop_detector)},
+        {"loop_interval_s", set(sl.loop_interval_s)},
+        {"robust_loops", set(sl.robust_loops)},
+        {"odometry_information_scale", set(sl.odometry_information_scale)},
+        {"min_information", set(sl.min_information)},
+        {"max_information", set(sl.max_information)},
+        {"weak_sigma_m", set(sl.weak_sigma_m)},
+        {"weak_sigma_rad", set(sl.weak_sigma_rad)},
+        {"keyframe_cloud_leaf_m", set(sl.keyframe_cloud_leaf_m)},
+        {"keyframe_cloud_max_range_m", set(sl.keyframe_cloud_max_range_m)}}},
+      {"loop_verify",
+       {{"max_verifications", set(sl.loop.max_verifications)},
+        {"submap_neighbours", set(lv.submap_neighbours)},
+        {"submap_min_age_s", set(lv.submap_min_age_s)},
+        {"coarse_gate_m", set(lv.coarse_gate_m)},
+        {"fine_gate_m", set(lv.fine_gate_m)},
+        {"max_fitness_m", set(lv.max_fitness_m)},
+        {"min_inlier_ratio", set(lv.min_inlier_ratio)},
+        {"reject_degenerate", set(lv.reject_degenerate)},
+        {"max_correction_m", set(lv.max_correction_m)},
+        {"max_correction_per_m", set(lv.max_correction_per_m)},
+        {"max_correction_rad", set(lv.max_correction_rad)},
+        {"max_correction_rad_per_m", set(lv.max_correction_rad_per_m)},
+        {"hessian_scale", set(lv.hessian_scale)}}},
+      {"radius_loop",
+       {{"radius_m", set(be.radius.radius_m)},
+        {"min_time_gap_s", set(be.radius.min_time_gap_s)},
+        {"max_candidates", set(be.radius.max_candidates)}}},
+      {"scan_context",
+       {{"rings", set(sc.rings)},
+        {"sectors", set(sc.sectors)},
+        {"max_radius_m", set(sc.max_radius_m)},
+        {"lidar_height_m", set(sc.lidar_height_m)},
+        {"min_time_gap_s", set(sc.min_time_gap_s)},
+        {"ring_key_candidates", set(sc.ring_key_candidates)},
+        {"max_distance", set(sc.max_distance)},
+        {"max_candidates", set(sc.max_candidates)}}},
+      {"graph",
+       {{"max_iterations", set(g.max_iterations)},
+        {"window_iterations", set(g.window_iterations)},
+        {"window_size", set(g.window_size)},
+        {"huber_delta", set(g.huber_delta)}}},
+      {"semantic_map",
+       {{"leaf_size_m", set(be.map.leaf_size_m)},
+        {"drop_dynamic", set(be.map.drop_dynamic)},
+        {"max_range_m", set(be.map.max_range_m)}}},
+  };
   for (const auto& kv : root) {
     const auto name = kv.first.as<std::string>();
+    if (name == "deskew") {
+      load_deskew_yaml(kv.second, s.deskew, path);
+      continue;
+    }
     const auto it = sections.find(name);
-    if (it == sections.end()) throw semlio::ConfigError(path + ": unknown section '" + name + "'");
-    detail::apply(kv.second, name, it->second, path);
+    if (it != sections.end()) {
+      detail::apply(kv.second, name, it->second, path);
+      continue;
+    }
+    const auto be_it = back_end.find(name);
+    if (be_it == back_end.end()) throw semlio::ConfigError(path + ": unknown section '" + name + "'");
+    detail::apply(kv.second, name, be_it->second, path);
   }
 }
 

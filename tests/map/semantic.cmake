@@ -1,2 +1,2 @@
 # Global semantic map.
-set(SEMLIO_TESTS_map_semantic)
+set(SEMLIO_TESTS_map_semantic map/test_semantic_map.cpp)

@@ -1,0 +1,437 @@
+#pragma once
+/// \file
+/// Slam<Odometry, Detector>: the paper's back end (§3 steps 4-5, METHOD.md
+/// step 9, without IMU) around any odometry front end: per scan the front end
+/// runs unchanged; on its keyframes the back end adds a pose-graph node with
+/// an odometry between-factor, stores a compact LoopKeyframe, asks the loop
+/// closer for a verified loop and, when one is found, adds it as a loop factor
+/// and re-solves the graph (a warm-started full solve; graph/pose_graph.hpp).
+///
+/// Frames. The front end keeps working in its own drifting "odometry" frame
+/// (its local map is never rewritten). The back end's "world" frame is the
+/// graph's: node 0 (the first keyframe) is fixed at its odometry pose, so
+/// both frames coincide until the first loop. The pose of a frame is the
+/// optimised pose of its preceding keyframe composed with the odometry motion
+/// since that keyframe: T_world_frame = T_world_kf * (T_odom_kf^-1 T_odom_frame).
+/// trajectory() re-evaluates this for every frame with the latest graph, so it
+/// is the optimised trajectory; without loops it equals the odometry.
+///
+/// Odometry information (why this scaling). The front end's Gauss-Newton
+/// Hessian H = J^T W J of its sum of squared (semantically weighted, robustly
+/// reweighted) point-to-line/plane residuals, at its final pose, is the
+/// inverse covariance of the right perturbation of T_map_lidar for unit
+/// residual variance ([rho; phi] order, as the graph). Near the optimum the
+/// between error's Jacobian with respect to that perturbation of the new node
+/// is the identity, so Omega = s * H with s = 1 / sigma_r^2 is the information
+/// of the between factor (the registration measures the new keyframe relative
+/// to the local map, which the previous keyframe anchors). The default s = 1
+/// (sigma_r = 1 m) is deliberately conservative: the residuals are correlated
+/// (neighbouring points share a plane), so H over-counts evidence; and it is
+/// the same scale the loop verifier uses for loop factors
+/// (LoopVerifierConfig::hessian_scale = 1), so odometry and loops are weighed
+/// consistently. Eigenvalues are clamped to [min_information, max_information]:
+/// a degenerate direction (tunnel, open field) then gets a weak but positive
+/// information instead of a singular graph. When a frame since the previous
+/// keyframe failed (too few features, solver failure, rejected jump) the
+/// motion partly came from the constant-velocity prediction, and the factor
+/// gets the weak default diag(1/sigma_t^2, 1/sigma_r^2) (1 m, 0.1 rad).
+///
+/// Memory (bounded per keyframe). Per keyframe the back end keeps a
+/// LoopKeyframe: the LOAM features (corners and voxelised surfaces, 13 bytes
+/// each: position + label; the per-point scan indices are dropped) when loops
+/// are on, and the preprocessed scan voxel-downsampled at
+/// keyframe_cloud_leaf_m (0.5 m default; 13 bytes per point), plus a graph
+/// node and two factors (~1 kB). Measured on real KITTI 00 frame 0: ~11k
+/// cloud points + ~8k features = 0.25 MB per keyframe (keyframe_bytes()
+/// reports it; semlio_kitti writes it to report.json). Per frame only an index
+/// and a relative pose (~70 bytes) are kept. Nothing else grows with the drive
+/// (the front end's own local map is its business).
+///
+/// Cost per frame: the odometry plus, on keyframes, a voxel downsample, the
+/// loop detector (linear in keyframes, microseconds) and a window graph
+/// update (constant). A loop closure costs a verification and a full graph
+/// solve; those frames are flagged in the report (loop_checked/loop_closed).
+///
+/// Not thread-safe; one Slam per sensor stream.
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <semlio/core/error.hpp>
+#include <semlio/core/scan.hpp>
+#include <semlio/features/loam_features.hpp>
+#include <semlio/graph/pose_graph.hpp>
+#include <semlio/lie/se3.hpp>
+#include <semlio/loop/loop_closer.hpp>
+#include <semlio/loop/loop_keyframe.hpp>
+#include <semlio/loop/radius_detector.hpp>
+#include <semlio/map/semantic_map.hpp>
+#include <semlio/pipeline/odometry.hpp>
+#include <semlio/search/voxel_grid.hpp>
+
+namespace semlio {
+
+/// What Slam needs of a front end: Odometry's process() and features().
+template <typename O>
+concept SlamFrontEnd = requires(O o, Scan& scan, const std::optional<SE3d>& prior) {
+  { o.process(scan, prior) } -> std::same_as<FrameReport>;
+  { o.features() } -> std::convertible_to<const LoamFeatures&>;
+};
+
+/// Settings of Slam (documented defaults; see the file comment for the why).
+struct SlamConfig {
+  bool loop_closure = true;                  ///< detect and add loops; off: the back end only mirrors the odometry
+  LoopCloserConfig loop{};                   ///< verification thresholds (loop_closer.hpp / loop_verifier.hpp)
+  PoseGraphConfig graph{};                   ///< solver; window_size newest keyframes per incremental update
+  double loop_interval_s = 1.0;              ///< query the loop closer at most this often [s] (LIO-SAM: 1 Hz); 0 = every keyframe
+  bool robust_loops = true;                  ///< Huber-weight loop factors (graph.huber_delta)
+  double odometry_information_scale = 1.0;   ///< Omega = scale * H (residual sigma 1 m / sqrt(scale))
+  double min_information = 1e-2;             ///< eigenvalue floor of an odometry factor's information
+  double max_information = 1e8;              ///< eigenvalue ceiling of the same
+  double weak_sigma_m = 1.0;                 ///< weak default (failed frames in between): translation sigma [m]
+  double weak_sigma_rad = 0.1;               ///< weak default: rotation sigma [rad]
+  double keyframe_cloud_leaf_m = 0.5;        ///< voxel leaf of the cloud kept per keyframe (Scan Context, map) [m]
+  double keyframe_cloud_max_range_m = 80.0;  ///< drop farther points from the kept cloud [m]; 0 = keep all
+
+  /// Throws ConfigError naming the bad field and value.
+  void validate() const {
+    const auto positive = [](double v, const char* name) {
+      if (!(v > 0.0) || !std::isfinite(v)) {
+        throw ConfigError(std::string("SlamConfig.") + name + " = " + std::to_string(v) + ", expected a finite value > 0");
+      }
+    };
+    positive(odometry_information_scale, "odometry_information_scale");
+    positive(min_information, "min_information");
+    positive(max_information, "max_information");
+    positive(weak_sigma_m, "weak_sigma_m");
+    positive(weak_sigma_rad, "weak_sigma_rad");
+    positive(keyframe_cloud_leaf_m, "keyframe_cloud_leaf_m");
+    if (!(min_information <= max_information)) {
+      throw ConfigError("SlamConfig.min_information = " + std::to_string(min_information) +
+                        " exceeds max_information = " + std::to_string(max_information));
+    }
+    if (!(loop_interval_s >= 0.0) || !std::isfinite(loop_interval_s)) {
+      throw ConfigError("SlamConfig.loop_interval_s = " + std::to_string(loop_interval_s) + ", expected >= 0");
+    }
+    if (!(keyframe_cloud_max_range_m >= 0.0)) {
+      throw ConfigError("SlamConfig.keyframe_cloud_max_range_m = " + std::to_string(keyframe_cloud_max_range_m) +
+                        ", expected >= 0");
+    }
+  }
+};
+
+/// One accepted loop closure as the back end used it.
+struct SlamLoop {
+  std::size_t from_keyframe = 0;   ///< older keyframe (graph node)
+  std::size_t to_keyframe = 0;     ///< newer keyframe (graph node)
+  std::size_t from_frame = 0;      ///< frame index of from_keyframe
+  std::size_t to_frame = 0;        ///< frame index of to_keyframe
+  double fitness_m = 0.0;          ///< verification RMS residual [m]
+  double inlier_ratio = 0.0;       ///< verification matched fraction
+  double correction_m = 0.0;       ///< distance between the query keyframe's estimate and the loop's measurement of it, before the solve [m]
+  GraphSolveReport solve;          ///< the full graph solve it triggered
+  double solve_ms = 0.0;           ///< wall time of that solve [ms]
+};
+
+/// What Slam::process reports about one frame.
+struct SlamFrameReport {
+  FrameReport odometry;               ///< the front end's report (pose in the odometry frame)
+  SE3d T_world_lidar;                 ///< pose in the world (graph) frame at this time
+  bool keyframe = false;              ///< a graph node was added
+  bool loop_checked = false;          ///< the loop closer ran a verification this frame
+  bool loop_closed = false;           ///< a loop was accepted and the graph re-solved
+  std::optional<GraphSolveReport> graph;  ///< the graph update of this frame (keyframes with loops on)
+  double backend_ms = 0.0;            ///< back-end wall time (downsample, loops, graph) [ms]
+  double total_ms = 0.0;              ///< odometry + back end [ms]
+};
+
+namespace detail {
+
+/// Symmetric eigenvalue clamp of a 6x6 information matrix; identity * lo when
+/// the input is not finite.
+inline Eigen::Matrix<double, 6, 6> clamp_information6(const Eigen::Matrix<double, 6, 6>& H, double lo, double hi) {
+  using Matrix6 = Eigen::Matrix<double, 6, 6>;
+  if (!H.allFinite()) return Matrix6::Identity() * lo;
+  const Matrix6 S = 0.5 * (H + H.transpose());
+  const Eigen::SelfAdjointEigenSolver<Matrix6> es(S);
+  Eigen::Matrix<double, 6, 1> ev = es.eigenvalues();
+  for (int k = 0; k < 6; ++k) ev[k] = std::isfinite(ev[k]) ? std::clamp(ev[k], lo, hi) : lo;
+  Matrix6 out = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
+  if (!out.allFinite()) return Matrix6::Identity() * lo;
+  return 0.5 * (out + out.transpose());
+}
+
+/// True for statuses whose pose came from the prediction, not from data.
+constexpr bool prediction_only(OdometryStatus s) noexcept {
+  return s == OdometryStatus::kTooFewFeatures || s == OdometryStatus::kSolverFailed ||
+         s == OdometryStatus::kRejectedJump;
+}
+
+/// Copy of a feature set without the scan indices (not needed by the back end).
+inline FeatureSet compact_features(const FeatureSet& in) {
+  FeatureSet out;
+  out.points = in.points;
+  out.labels = in.labels;
+  return out;
+}
+
+}  // namespace detail
+
+/// Front end + pose graph + loop closure + semantic map. Owns the odometry
+/// and the detector by value (CTAD: `Slam slam(make_full_odometry(...),
+/// RadiusLoopDetector{}, config);`).
+template <SlamFrontEnd OdometryT, LoopDetector Detector = RadiusLoopDetector>
+class Slam {
+ public:
+  using Config = SlamConfig;
+
+  /// Takes the configured front end and loop detector.
+  explicit Slam(OdometryT odometry, Detector detector = Detector(), const Config& config = {})
+      : config_((config.validate(), config)),
+        odometry_(std::move(odometry)),
+        closer_(std::move(detector), config.loop),
+        graph_(config.graph),
+        cloud_grid_(VoxelGridConfig{.leaf_size_m = config.keyframe_cloud_leaf_m}) {}
+
+  /// Processes one scan (sensor frame; consumed as the front end's working
+  /// buffer). `T_world_lidar_prior`, when given, is a pose prior in the world
+  /// (graph) frame; it is mapped into the odometry frame for the front end.
+  SlamFrameReport process(Scan& scan, const std::optional<SE3d>& T_world_lidar_prior = std::nullopt) {
+    using Clock = std::chrono::steady_clock;
+    SlamFrameReport out;
+    std::optional<SE3d> prior_odom;
+    if (T_world_lidar_prior && T_world_lidar_prior->matrix().allFinite()) {
+      prior_odom = has_keyframe() ? T_odom_kf_.back() * graph_.pose(last_node()).inverse() * *T_world_lidar_prior
+                                  : *T_world_lidar_prior;
+    }
+    out.odometry = odometry_.process(scan, prior_odom);
+    const auto t0 = Clock::now();
+    SE3d T_odom = out.odometry.T_map_lidar;
+    if (!T_odom.matrix().allFinite()) T_odom = odom_poses_.empty() ? SE3d() : odom_poses_.back();
+    failed_since_keyframe_ = failed_since_keyframe_ || detail::prediction_only(out.odometry.status);
+
+    if (out.odometry.keyframe) {
+      out.keyframe = true;
+      add_keyframe(scan, out, T_odom);
+    }
+    // Frame bookkeeping: preceding keyframe and the odometry motion since it.
+    odom_poses_.push_back(T_odom);
+    if (has_keyframe()) {
+      frame_kf_.push_back(static_cast<std::uint32_t>(last_node()));
+      frame_rel_.push_back(T_odom_kf_.back().inverse() * T_odom);
+    } else {
+      frame_kf_.push_back(kNoKeyframe);
+      frame_rel_.push_back(T_odom);
+    }
+    out.T_world_lidar = world_pose(frames() - 1);
+    out.backend_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    out.total_ms = out.odometry.timings.total_ms + out.backend_ms;
+    return out;
+  }
+
+  /// Number of processed frames.
+  [[nodiscard]] std::size_t frames() const noexcept { return odom_poses_.size(); }
+  /// Optimised pose of frame i in the world frame with the latest graph.
+  [[nodiscard]] SE3d world_pose(std::size_t i) const {
+    if (i >= frames()) throw ValueError("Slam::world_pose: frame " + std::to_string(i) + " of " + std::to_string(frames()));
+    return frame_kf_[i] == kNoKeyframe ? frame_rel_[i] : graph_.pose(frame_kf_[i]) * frame_rel_[i];
+  }
+  /// Optimised trajectory, one pose per processed frame (world frame).
+  [[nodiscard]] std::vector<SE3d> trajectory() const {
+    std::vector<SE3d> out(frames());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = world_pose(i);
+    return out;
+  }
+  /// Odometry-only trajectory, one pose per processed frame (odometry frame).
+  [[nodiscard]] const std::vector<SE3d>& odometry_trajectory() const noexcept { return odom_poses_; }
+  /// Frame index of every keyframe (graph node order).
+  [[nodiscard]] const std::vector<std::size_t>& keyframe_frames() const noexcept { return keyframe_frame_; }
+  /// The stored keyframes (poses = latest graph estimate).
+  [[nodiscard]] const std::vector<LoopKeyframe>& keyframes() const noexcept { return keyframes_; }
+  /// Accepted loops in order.
+  [[nodiscard]] const std::vector<SlamLoop>& loops() const noexcept { return loops_; }
+  /// The loop closer's counters (queries, candidates, verifications, rejections).
+  [[nodiscard]] const LoopStats& loop_stats() const noexcept { return closer_.stats(); }
+  /// The pose graph (node i = keyframe i).
+  [[nodiscard]] const PoseGraph<SE3d>& graph() const noexcept { return graph_; }
+  /// Total wall time of graph updates so far [ms], and of the full solves among them.
+  [[nodiscard]] double graph_ms() const noexcept { return graph_ms_; }
+  /// Wall time of full graph solves (after loops) [ms].
+  [[nodiscard]] double graph_full_ms() const noexcept { return graph_full_ms_; }
+  /// The front end.
+  [[nodiscard]] const OdometryT& odometry() const noexcept { return odometry_; }
+  /// The settings.
+  [[nodiscard]] const Config& config() const noexcept { return config_; }
+
+  /// Heap bytes of the stored keyframes (features, clouds, labels).
+  [[nodiscard]] std::size_t keyframe_bytes() const noexcept {
+    std::size_t b = keyframes_.capacity() * sizeof(LoopKeyframe);
+    const auto set_bytes = [](const FeatureSet& f) {
+      return f.points.capacity() * sizeof(Eigen::Vector3f) + f.labels.capacity() * sizeof(Class) +
+             f.indices.capacity() * sizeof(std::uint32_t);
+    };
+    for (const LoopKeyframe& k : keyframes_) {
+      b += set_bytes(k.corners) + set_bytes(k.surfaces);
+      b += k.cloud.capacity() * sizeof(Eigen::Vector3f) + k.labels.capacity() * sizeof(Class);
+    }
+    return b;
+  }
+
+  /// The global semantic map: every keyframe's kept cloud at its optimised
+  /// pose, merged by SemanticMap (map/semantic_map.hpp).
+  [[nodiscard]] Scan semantic_map(const SemanticMapConfig& config = {}) const {
+    SemanticMap map(config);
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) map.insert(graph_.pose(static_cast<NodeId>(k)), keyframes_[k].cloud, keyframes_[k].labels);
+    return map.cloud();
+  }
+
+ private:
+  static constexpr std::uint32_t kNoKeyframe = std::numeric_limits<std::uint32_t>::max();
+
+  [[nodiscard]] bool has_keyframe() const noexcept { return !T_odom_kf_.empty(); }
+  [[nodiscard]] NodeId last_node() const noexcept { return static_cast<NodeId>(T_odom_kf_.size() - 1); }
+
+  Eigen::Matrix<double, 6, 6> odometry_information(const FrameReport& r) const {
+    Eigen::Matrix<double, 6, 6> weak = Eigen::Matrix<double, 6, 6>::Zero();
+    weak.diagonal() << Eigen::Vector3d::Constant(1.0 / (config_.weak_sigma_m * config_.weak_sigma_m)),
+        Eigen::Vector3d::Constant(1.0 / (config_.weak_sigma_rad * config_.weak_sigma_rad));
+    if (failed_since_keyframe_ || !r.solve.ok() || !r.solve.hessian.allFinite() || r.solve.hessian.isZero(0.0)) {
+      return weak;
+    }
+    return detail::clamp_information6(config_.odometry_information_scale * r.solve.hessian, config_.min_information,
+                                      config_.max_information);
+  }
+
+  void add_keyframe(const Scan& scan, SlamFrameReport& out, const SE3d& T_odom) {
+    // Graph node: optimised pose of the previous keyframe + odometry motion.
+    const std::size_t frame = frames();
+    SE3d T_world = T_odom;
+    if (has_keyframe()) {
+      const SE3d Z = T_odom_kf_.back().inverse() * T_odom;
+      T_world = graph_.pose(last_node()) * Z;
+      const NodeId prev = last_node();
+      const NodeId node = graph_.add_node(T_world);
+      graph_.add_between(prev, node, Z, odometry_information(out.odometry));
+    } else {
+      graph_.add_node(T_world);
+    }
+    failed_since_keyframe_ = false;
+    T_odom_kf_.push_back(T_odom);
+    keyframe_frame_.push_back(frame);
+
+    // Compact keyframe: downsampled cloud (+ features when loops are on).
+    LoopKeyframe kf;
+    kf.stamp_s = out.odometry.stamp_s;
+    kf.T_world_lidar = T_world;
+    downsample_cloud(scan, kf);
+    if (config_.loop_closure) {
+      kf.corners = detail::compact_features(odometry_.features().corners);
+      kf.surfaces = detail::compact_features(odometry_.features().surfaces);
+    }
+    keyframes_.push_back(std::move(kf));
+    if (!config_.loop_closure) return;
+
+    // Loop closure, rate-limited.
+    std::optional<LoopConstraint> loop;
+    if (keyframes_.size() >= 2 &&
+        (!last_query_s_ || !(out.odometry.stamp_s - *last_query_s_ < config_.loop_interval_s))) {
+      last_query_s_ = out.odometry.stamp_s;
+      const std::size_t verified_before = closer_.stats().verified;
+      loop = closer_.process(keyframes_);
+      out.loop_checked = closer_.stats().verified > verified_before;
+    }
+    SlamLoop record;
+    if (loop && loop->from < loop->to && loop->to < keyframes_.size() && loop->information.allFinite() &&
+        loop->T_from_to.matrix().allFinite()) {
+      const SE3d before = graph_.pose(static_cast<NodeId>(loop->to));
+      graph_.add_loop(static_cast<NodeId>(loop->from), static_cast<NodeId>(loop->to), loop->T_from_to,
+                      detail::clamp_information6(loop->information, config_.min_information, config_.max_information),
+                      config_.robust_loops);
+      record.from_keyframe = loop->from;
+      record.to_keyframe = loop->to;
+      record.from_frame = keyframe_frame_[loop->from];
+      record.to_frame = keyframe_frame_[loop->to];
+      record.fitness_m = loop->fitness_m;
+      record.inlier_ratio = loop->inlier_ratio;
+      const SE3d measured_to = graph_.pose(static_cast<NodeId>(loop->from)) * loop->T_from_to;
+      record.correction_m = (measured_to.translation() - before.translation()).norm();
+      out.loop_closed = true;
+    }
+
+    // Graph update: window, or a warm-started full solve after a loop.
+    const bool full = graph_.full_solve_pending();
+    const auto t = std::chrono::steady_clock::now();
+    const GraphSolveReport report = graph_.update();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+    graph_ms_ += ms;
+    if (full) graph_full_ms_ += ms;
+    out.graph = report;
+    if (out.loop_closed) {
+      record.solve = report;
+      record.solve_ms = ms;
+      loops_.push_back(record);
+    }
+    // Hand the new estimates to the keyframes (all after a full solve).
+    const std::size_t n = keyframes_.size();
+    const std::size_t from = full ? 0 : n - std::min(n, config_.graph.window_size);
+    for (std::size_t k = from; k < n; ++k) keyframes_[k].T_world_lidar = graph_.pose(static_cast<NodeId>(k));
+  }
+
+  void downsample_cloud(const Scan& scan, LoopKeyframe& kf) {
+    const double r2 = config_.keyframe_cloud_max_range_m * config_.keyframe_cloud_max_range_m;
+    subset_.clear();
+    for (std::uint32_t i = 0; i < scan.points.size(); ++i) {
+      if (r2 > 0.0 && static_cast<double>(scan.points[i].squaredNorm()) > r2) continue;
+      subset_.push_back(i);
+    }
+    const std::vector<Class>& labels = scan.labels.size() == scan.points.size() ? scan.labels : no_labels_;
+    cloud_grid_.downsample(scan.points, labels, subset_, cloud_pts_, cloud_labels_, first_idx_);
+    kf.cloud.assign(cloud_pts_.begin(), cloud_pts_.end());
+    kf.labels.assign(cloud_labels_.begin(), cloud_labels_.end());
+  }
+
+  Config config_;
+  OdometryT odometry_;
+  LoopCloser<Detector> closer_;
+  PoseGraph<SE3d> graph_;
+  VoxelGrid cloud_grid_;
+  std::vector<LoopKeyframe> keyframes_;
+  std::vector<SE3d> T_odom_kf_;            // odometry pose of each keyframe
+  std::vector<std::size_t> keyframe_frame_;
+  std::vector<SlamLoop> loops_;
+  std::vector<SE3d> odom_poses_;           // per frame
+  std::vector<std::uint32_t> frame_kf_;    // per frame: preceding keyframe or kNoKeyframe
+  std::vector<SE3d> frame_rel_;            // per frame: T_odom_kf^-1 T_odom_frame
+  bool failed_since_keyframe_ = false;
+  std::optional<double> last_query_s_;
+  double graph_ms_ = 0.0;
+  double graph_full_ms_ = 0.0;
+  // Reused buffers.
+  std::vector<std::uint32_t> subset_;
+  std::vector<Eigen::Vector3f> cloud_pts_;
+  std::vector<Class> cloud_labels_;
+  std::vector<std::uint32_t> first_idx_;
+  std::vector<Class> no_labels_;
+};
+
+/// Deduction guides: front end and detector by value.
+template <typename O>
+Slam(O) -> Slam<O, RadiusLoopDetector>;
+template <typename O, typename D>
+Slam(O, D) -> Slam<O, D>;
+template <typename O, typename D>
+Slam(O, D, const SlamConfig&) -> Slam<O, D>;
+
+}  // namespace semlio

@@ -1,0 +1,313 @@
+// Slam<Odometry, Detector>: keyframe graph, loop closure on a simulated
+// revisiting drive, loops off == odometry, bad input, semantic map.
+#include <catch2/catch.hpp>
+
+#include <Eigen/Core>
+#include <Eigen/Eigenvalues>
+
+#include <chrono>
+#include <cmath>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <semlio/core/error.hpp>
+#include <semlio/core/labels.hpp>
+#include <semlio/eval/ate.hpp>
+#include <semlio/io/kitti.hpp>
+#include <semlio/loop/radius_detector.hpp>
+#include <semlio/loop/scan_context.hpp>
+#include <semlio/pipeline/presets.hpp>
+#include <semlio/pipeline/slam.hpp>
+#include <semlio/segment/scan_labels.hpp>
+#include <semlio/sim/simulator.hpp>
+#include <semlio_test/data.hpp>
+
+using namespace semlio;
+
+namespace {
+
+constexpr std::size_t kFrames = 120;  // a 12 s revisit drive (the simulator's shortest kind: out and back)
+
+PipelineSettings settings() {
+  PipelineSettings s;
+  s.odometry.kitti_vertical_correction = false;  // simulated scans
+  return s;
+}
+
+// One frame of a recorded odometry run: what Slam reads from its front end.
+struct Recorded {
+  FrameReport report;
+  LoamFeatures features;  // keyframes only
+  Scan scan;              // processed scan (points + labels), keyframes only
+};
+
+// The simulated revisiting drive (half the azimuth resolution of an HDL-64 to
+// keep the test fast) and one run of the real full odometry over it,
+// generated once for all test cases.
+struct Drive {
+  std::vector<Scan> scans;
+  std::vector<SE3d> gt;  // T_lidar0_lidar_i
+  std::vector<Recorded> odometry;
+};
+
+const Drive& drive() {
+  static const Drive d = [] {
+    sim::SimulatorConfig c;
+    c.world = sim::WorldKind::kUrban;
+    c.traffic = sim::TrafficLevel::kLight;
+    c.frames = kFrames;
+    c.seed = 3;
+    c.revisit = true;
+    c.threads = 2;
+    c.lidar.azimuth_steps = 1080;
+    const sim::Simulator s(c);
+    Drive out;
+    out.gt = s.lidar_poses();
+    auto odom = make_full_odometry(ScanLabels{}, settings());
+    for (std::size_t i = 0; i < kFrames; ++i) {
+      out.scans.push_back(s.frame(i).scan);
+      Scan work = out.scans.back();
+      Recorded r;
+      r.report = odom.process(work);
+      if (r.report.keyframe) {
+        r.features = odom.features();
+        r.scan.points = work.points;
+        r.scan.labels = work.labels;
+      }
+      out.odometry.push_back(std::move(r));
+    }
+    return out;
+  }();
+  return d;
+}
+
+// A front end replaying the recorded odometry run, optionally with a
+// systematic drift on top: every frame's motion gets an extra yaw of
+// yaw_rad_per_m per metre driven and its translation is scaled by
+// (1 + scale_error) -- the kind of error loop closure exists to remove.
+class ReplayFrontEnd {
+ public:
+  explicit ReplayFrontEnd(double yaw_rad_per_m = 0.0, double scale_error = 0.0)
+      : yaw_rad_per_m_(yaw_rad_per_m), scale_error_(scale_error) {}
+  FrameReport process(Scan& scan, const std::optional<SE3d>& /*prior*/) {
+    const Recorded& rec = drive().odometry.at(next_++);
+    FrameReport r = rec.report;
+    scan = rec.scan;
+    features_ = &rec.features;
+    if (yaw_rad_per_m_ == 0.0 && scale_error_ == 0.0) return r;  // exact replay
+    const SE3d step = last_true_.inverse() * r.T_map_lidar;
+    const double d = step.translation().norm();
+    const SE3d drifted_step(step.so3() * SO3d::exp(Eigen::Vector3d(0.0, 0.0, yaw_rad_per_m_ * d)),
+                            (1.0 + scale_error_) * step.translation());
+    last_true_ = r.T_map_lidar;
+    last_drifted_ = last_drifted_ * drifted_step;
+    r.T_map_lidar = last_drifted_;
+    return r;
+  }
+  [[nodiscard]] const LoamFeatures& features() const { return *features_; }
+
+ private:
+  double yaw_rad_per_m_;
+  double scale_error_;
+  std::size_t next_ = 0;
+  const LoamFeatures* features_ = nullptr;
+  SE3d last_true_;
+  SE3d last_drifted_;
+};
+static_assert(SlamFrontEnd<ReplayFrontEnd>);
+
+template <typename D>
+Slam<ReplayFrontEnd, D> replay(ReplayFrontEnd front, D detector, const SlamConfig& config) {
+  Slam<ReplayFrontEnd, D> slam(front, std::move(detector), config);
+  for (std::size_t i = 0; i < kFrames; ++i) {
+    Scan scan;
+    const SlamFrameReport r = slam.process(scan);
+    REQUIRE(r.T_world_lidar.matrix().allFinite());
+  }
+  return slam;
+}
+
+RadiusLoopDetector radius_detector() { return RadiusLoopDetector({.radius_m = 15.0, .min_time_gap_s = 5.0}); }
+
+double endpoint_error(const std::vector<SE3d>& est, const std::vector<SE3d>& gt) {
+  return (est.back().translation() - gt.back().translation()).norm();
+}
+
+bool finite(const SE3d& T) { return T.matrix().allFinite(); }
+
+}  // namespace
+
+TEST_CASE("Slam: the simulated drive comes back to its start", "[pipeline]") {
+  const Drive& d = drive();
+  REQUIRE(d.scans.size() == kFrames);
+  std::size_t tracked = 0;
+  for (const Recorded& r : d.odometry) {
+    tracked += r.report.status == OdometryStatus::kTracked || r.report.status == OdometryStatus::kDegenerate ? 1 : 0;
+  }
+  CHECK(tracked + 1 == kFrames);
+  double path = 0.0;
+  for (std::size_t i = 1; i < d.gt.size(); ++i) path += (d.gt[i].translation() - d.gt[i - 1].translation()).norm();
+  INFO("path " << path << " m, end " << d.gt.back().translation().transpose());
+  CHECK(path > 30.0);
+  CHECK(d.gt.back().translation().norm() < 15.0);  // within the loop search radius of the start
+}
+
+TEST_CASE("Slam with loops off reproduces the odometry", "[pipeline]") {
+  const Drive& d = drive();
+  const auto slam = replay(ReplayFrontEnd(), RadiusLoopDetector{}, SlamConfig{.loop_closure = false});
+  const std::vector<SE3d> traj = slam.trajectory();
+  REQUIRE(traj.size() == kFrames);
+  REQUIRE(slam.odometry_trajectory().size() == kFrames);
+  std::size_t keyframes = 0;
+  for (std::size_t i = 0; i < kFrames; ++i) {
+    const SE3d& T_odom = d.odometry[i].report.T_map_lidar;
+    CHECK((traj[i].matrix() - T_odom.matrix()).norm() < 1e-9);
+    CHECK((slam.world_pose(i).matrix() - T_odom.matrix()).norm() < 1e-9);
+    CHECK((slam.odometry_trajectory()[i].matrix() - T_odom.matrix()).norm() == 0.0);
+    keyframes += d.odometry[i].report.keyframe ? 1 : 0;
+  }
+  CHECK(slam.loops().empty());
+  CHECK(slam.loop_stats().queries == 0);
+  REQUIRE(slam.keyframes().size() == keyframes);
+  CHECK(slam.graph().num_nodes() == keyframes);
+  CHECK(slam.graph().num_factors() + 1 == keyframes);
+  for (std::size_t k = 0; k < keyframes; ++k) {
+    CHECK(d.odometry[slam.keyframe_frames()[k]].report.keyframe);
+  }
+  // Features are only kept when loops are on; clouds always (for the map).
+  CHECK(slam.keyframes().back().surfaces.size() == 0);
+  CHECK(slam.keyframes().back().cloud.size() > 1000);
+  CHECK(slam.keyframes().back().labels.size() == slam.keyframes().back().cloud.size());
+}
+
+TEST_CASE("Slam: loop closure removes the drift of a revisiting drive", "[pipeline]") {
+  const Drive& d = drive();
+  // Heading drift only: the short revisit drive goes out and back along one
+  // street, where a loop at the start cannot observe a scale error (both legs
+  // shrink alike), but it does see the lateral error a heading drift builds up.
+  const auto off = replay(ReplayFrontEnd(0.003, 0.0), radius_detector(), SlamConfig{.loop_closure = false});
+  const auto on = replay(ReplayFrontEnd(0.003, 0.0), radius_detector(),
+                         SlamConfig{.loop_closure = true, .loop_interval_s = 0.0});
+  const std::vector<SE3d> traj_off = off.trajectory();
+  const std::vector<SE3d> traj_on = on.trajectory();
+  const double end_off = endpoint_error(traj_off, d.gt);
+  const double end_on = endpoint_error(traj_on, d.gt);
+  const double ate_off = eval::ate(d.gt, traj_off).rmse_m;
+  const double ate_on = eval::ate(d.gt, traj_on).rmse_m;
+  INFO("loops " << on.loops().size() << " candidates " << on.loop_stats().candidates << " verified "
+                << on.loop_stats().verified << " endpoint " << end_off << " -> " << end_on << " m, ATE " << ate_off
+                << " -> " << ate_on << " m");
+  REQUIRE(on.loops().size() >= 1);
+  CHECK(end_on < 0.5 * end_off);
+  CHECK(ate_on < ate_off);
+  // The odometry-only trajectory is untouched by the loops.
+  for (std::size_t i = 0; i < d.gt.size(); ++i) {
+    CHECK((on.odometry_trajectory()[i].matrix() - off.odometry_trajectory()[i].matrix()).norm() < 1e-9);
+  }
+  // Every loop links an older keyframe to a newer one with a good fit, a
+  // measurement close to the ground truth and a successful full solve.
+  for (const auto& f : on.graph().factors()) {
+    if (f.kind != FactorKind::loop) continue;
+    const std::size_t a = on.keyframe_frames()[f.from];
+    const std::size_t b = on.keyframe_frames()[f.to];
+    const SE3d err = (d.gt[a].inverse() * d.gt[b]).inverse() * f.measured;
+    INFO("loop " << a << " -> " << b << ": error " << err.translation().norm() << " m, " << err.so3().angle()
+                 << " rad; information diag " << f.information.diagonal().transpose());
+    CHECK(err.translation().norm() < 0.3);
+    CHECK(err.so3().angle() < 0.02);
+  }
+  for (const SlamLoop& l : on.loops()) {
+    CHECK(l.from_keyframe < l.to_keyframe);
+    CHECK(l.from_frame < l.to_frame);
+    CHECK(l.fitness_m <= SlamConfig{}.loop.verify.max_fitness_m);
+    CHECK(l.solve.ok());
+    CHECK(l.solve.mode == GraphSolveMode::full);
+  }
+  CHECK(on.graph().num_factors() == on.graph().num_nodes() - 1 + on.loops().size());
+  // Memory: a bounded amount per keyframe (features + a 0.5 m cloud).
+  const double per_kf = static_cast<double>(on.keyframe_bytes()) / static_cast<double>(on.keyframes().size());
+  INFO("bytes per keyframe " << per_kf);
+  CHECK(per_kf < 1.0e6);
+
+  // The semantic map from the optimised keyframes.
+  const Scan map = on.semantic_map({.leaf_size_m = 0.4});
+  const Scan clean = on.semantic_map({.leaf_size_m = 0.4, .drop_dynamic = true});
+  REQUIRE(map.has_labels());
+  CHECK(map.size() > 10000);
+  CHECK(clean.size() <= map.size());
+  const auto hist = label_histogram(map);
+  CHECK(hist[static_cast<std::size_t>(Class::kRoad)] > 0);
+  CHECK(hist[static_cast<std::size_t>(Class::kBuilding)] > 0);
+  for (const Class c : clean.labels) CHECK_FALSE(is_dynamic(c));
+}
+
+TEST_CASE("Slam with Scan Context finds the loop too", "[pipeline]") {
+  const Drive& d = drive();
+  const auto slam = replay(ReplayFrontEnd(), ScanContextDetector(ScanContextConfig{.min_time_gap_s = 5.0}),
+                           SlamConfig{.loop_closure = true, .loop_interval_s = 0.0});
+  INFO("candidates " << slam.loop_stats().candidates << " verified " << slam.loop_stats().verified);
+  CHECK(slam.loop_stats().queries > 0);
+  CHECK(slam.loops().size() >= 1);
+  const double ate = eval::ate(d.gt, slam.trajectory()).rmse_m;
+  const double ate_odom = eval::ate(d.gt, slam.odometry_trajectory()).rmse_m;
+  INFO("ATE odometry " << ate_odom << " slam " << ate);
+  CHECK(ate < ate_odom + 0.05);  // a true loop never makes it notably worse
+}
+
+TEST_CASE("Slam survives bad input without NaN poses", "[pipeline]") {
+  const Drive& d = drive();
+  Slam slam(make_full_odometry(ScanLabels{}, settings()), radius_detector(), SlamConfig{.loop_interval_s = 0.0});
+  Scan empty;
+  empty.stamp_s = -1.0;
+  CHECK(finite(slam.process(empty).T_world_lidar));  // before any keyframe
+  for (std::size_t i = 0; i < 4; ++i) {
+    Scan s = d.scans[i];
+    CHECK(finite(slam.process(s).T_world_lidar));
+  }
+  Scan none;
+  none.stamp_s = d.scans[4].stamp_s;
+  CHECK(finite(slam.process(none).T_world_lidar));  // empty scan: prediction
+  Scan back = d.scans[2];                           // time goes backwards
+  const SlamFrameReport rb = slam.process(back);
+  CHECK(rb.odometry.status == OdometryStatus::kTimeWentBackwards);
+  CHECK(finite(rb.T_world_lidar));
+  Scan nan_scan = d.scans[5];
+  for (std::size_t i = 0; i < nan_scan.size(); i += 3) nan_scan.points[i].x() = std::nanf("");
+  CHECK(finite(slam.process(nan_scan).T_world_lidar));
+  for (std::size_t i = 6; i < 9; ++i) {
+    Scan s = d.scans[i];
+    CHECK(finite(slam.process(s).T_world_lidar));
+  }
+  // A prior with NaN is ignored.
+  Scan p = d.scans[9];
+  CHECK(finite(slam.process(p, SE3d(SO3d(), Eigen::Vector3d::Constant(std::nan("")))).T_world_lidar));
+  for (const SE3d& T : slam.trajectory()) CHECK(finite(T));
+  CHECK(slam.frames() == 1 + 4 + 1 + 1 + 1 + 3 + 1);
+  // Information of every odometry factor is finite and positive definite.
+  for (const auto& f : slam.graph().factors()) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> es(f.information);
+    CHECK(es.eigenvalues().minCoeff() > 0.0);
+  }
+}
+
+TEST_CASE("Slam on the real KITTI scans, and config validation", "[pipeline]") {
+  PipelineSettings s;
+  s.odometry.kitti_vertical_correction = true;
+  Slam slam(make_full_odometry(ScanLabels{}, s));
+  for (int i = 0; i < 2; ++i) {
+    Scan scan = io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/00000" + std::to_string(i) + ".bin"));
+    scan.stamp_s = 0.1 * i;
+    const SlamFrameReport r = slam.process(scan);
+    CHECK(finite(r.T_world_lidar));
+  }
+  // Scan alignment gives ~0.69 m forward between these frames (data README).
+  CHECK(slam.trajectory().back().translation().x() == Approx(0.69).margin(0.08));
+  CHECK(slam.keyframes().front().cloud.size() > 5000);
+  CHECK_THROWS_AS(SlamConfig{.odometry_information_scale = 0.0}.validate(), ConfigError);
+  CHECK_THROWS_AS(SlamConfig{.keyframe_cloud_leaf_m = -1.0}.validate(), ConfigError);
+  CHECK_THROWS_AS((SlamConfig{.min_information = 10.0, .max_information = 1.0}.validate()), ConfigError);
+  CHECK_THROWS_AS(SlamConfig{.loop_interval_s = -1.0}.validate(), ConfigError);
+  CHECK_NOTHROW(SlamConfig{}.validate());
+}
