@@ -1,0 +1,286 @@
+// semlio_lio: lidar-inertial (or lidar-only) odometry on a KITTI-layout
+// sequence with a KITTI raw oxts/ folder (a semlio_simulate drive writes one)
+// and Tr_imu_velo in calib.txt. Writes OUT/poses.txt (KITTI camera-0 form
+// when calib.txt has Tr, else lidar poses) and OUT/report.json (ATE when
+// ground truth is found, IMU fallbacks, degeneracy along the road).
+//
+//   semlio_lio --sequence DIR --out DIR [--imu oxts|none] [--deskew on|off]
+//              [--preset baseline|full] [--labels labels|predictions|none]
+//              [--time-offset auto|SECONDS] [--first N] [--last N]
+//              [--kitti-correction on|off|auto] [--quiet]
+//
+// --imu none: the lidar-only front end (constant velocity; --deskew on uses
+// constant-velocity deskew). --time-offset auto: t_imu = t_lidar + offset with
+// offset = first OXTS stamp - first scan stamp when the two clocks are more
+// than 1000 s apart (the simulator's OXTS carries a date, times.txt starts at
+// 0; both start together), else 0.
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <semlio/eval/ate.hpp>
+#include <semlio/features/rings.hpp>
+#include <semlio/imu/deskew.hpp>
+#include <semlio/io/kitti.hpp>
+#include <semlio/io/kitti_sequence.hpp>
+#include <semlio/io/oxts.hpp>
+#include <semlio/io/trajectory.hpp>
+#include <semlio/pipeline/lidar_inertial.hpp>
+#include <semlio/pipeline/presets.hpp>
+#include <semlio/segment/scan_labels.hpp>
+
+#include "json_writer.hpp"
+
+namespace fs = std::filesystem;
+using semlio::SE3d;
+
+namespace {
+
+struct Options {
+  std::string sequence;
+  std::string out;
+  std::string imu = "oxts";
+  std::string deskew = "off";
+  std::string preset = "baseline";
+  std::string labels = "labels";
+  std::string time_offset = "auto";
+  std::string kitti_correction = "auto";
+  long first = 0;
+  long last = -1;
+  bool quiet = false;
+};
+
+// Facts kept per frame for the report.
+struct FrameFacts {
+  SE3d T_map_lidar;
+  std::string status;
+  bool degenerate = false;
+  double degenerate_along_track = 0.0;  // |cos| between the weakest direction's translation and the motion
+  bool imu_predicted = false;
+  bool imu_fallback = false;
+  double total_ms = 0.0;
+};
+
+// |cos| of the angle between the translation part of the weakest Hessian
+// direction and the frame's motion (both in the lidar frame).
+double along_track(const semlio::FrameReport& r, const SE3d& T_prev, const SE3d& T_cur) {
+  const Eigen::Vector3d t = r.solve.eigenvectors.col(0).head<3>();
+  const Eigen::Vector3d d = (T_prev.inverse() * T_cur).translation();
+  if (t.norm() < 1e-9 || d.norm() < 1e-6) return 0.0;
+  return std::abs(t.normalized().dot(d.normalized()));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  CLI::App app{"semlio_lio: lidar-inertial odometry on a KITTI-layout sequence with oxts/"};
+  app.add_option("--sequence", opt.sequence, "sequence directory (velodyne/, calib.txt, times.txt, oxts/)")->required();
+  app.add_option("--out", opt.out, "output directory")->required();
+  app.add_option("--imu", opt.imu, "oxts: lidar-inertial; none: lidar-only")->check(CLI::IsMember({"oxts", "none"}));
+  app.add_option("--deskew", opt.deskew, "deskew sweeps (raw data / --distortion on drives)")
+      ->check(CLI::IsMember({"on", "off"}));
+  app.add_option("--preset", opt.preset, "front end: baseline or full")->check(CLI::IsMember({"baseline", "full"}));
+  app.add_option("--labels", opt.labels, "label folder, or none")
+      ->check(CLI::IsMember({"labels", "predictions", "none"}));
+  app.add_option("--time-offset", opt.time_offset, "t_imu = t_lidar + offset [s], or auto");
+  app.add_option("--kitti-correction", opt.kitti_correction, "KITTI vertical-angle fix (auto: off for sim.json drives)")
+      ->check(CLI::IsMember({"on", "off", "auto"}));
+  app.add_option("--first", opt.first, "first frame (inclusive)");
+  app.add_option("--last", opt.last, "last frame (inclusive)");
+  app.add_flag("--quiet", opt.quiet, "no progress output");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+
+  try {
+    semlio::io::KittiSequenceConfig sc;
+    sc.label_folder = opt.labels == "none" ? "" : opt.labels;
+    const semlio::io::KittiSequence seq(opt.sequence, sc);
+    const long n_frames = static_cast<long>(seq.size());
+    const long last = opt.last < 0 ? n_frames - 1 : std::min(opt.last, n_frames - 1);
+    if (opt.first < 0 || opt.first > last) {
+      std::cerr << "semlio_lio: --first/--last select no frame of " << n_frames << "\n";
+      return 2;
+    }
+    const auto first = static_cast<std::size_t>(opt.first);
+    const auto last_u = static_cast<std::size_t>(last);
+    const bool simulated = fs::exists(fs::path(seq.directory()) / "sim.json");
+    const bool deskew = opt.deskew == "on";
+
+    semlio::PipelineSettings settings;
+    settings.odometry.kitti_vertical_correction =
+        opt.kitti_correction == "on" || (opt.kitti_correction == "auto" && !simulated);
+
+    // IMU and extrinsic.
+    std::vector<semlio::ImuSample> imu;
+    semlio::LidarInertialConfig lc;
+    lc.deskew = deskew;
+    if (opt.imu == "oxts") {
+      imu = semlio::io::imu_samples(semlio::io::read_oxts((fs::path(seq.directory()) / "oxts").string()));
+      if (!seq.calibration() || !seq.calibration()->T_imu_velo) {
+        std::cerr << "semlio_lio: " << seq.directory() << "/calib.txt has no Tr_imu_velo (lidar -> IMU extrinsic)\n";
+        return 2;
+      }
+      lc.T_imu_lidar = *seq.calibration()->T_imu_velo;
+      if (opt.time_offset == "auto") {
+        const double d = imu.empty() ? 0.0 : imu.front().stamp_s - seq.stamp(first);
+        lc.imu_time_offset_s = std::abs(d) > 1000.0 ? imu.front().stamp_s - seq.stamp(0) : 0.0;
+      } else {
+        lc.imu_time_offset_s = std::stod(opt.time_offset);
+      }
+    }
+
+    std::vector<FrameFacts> facts;
+    facts.reserve(last_u - first + 1);
+    std::optional<std::size_t> init_frame;
+    const auto start = std::chrono::steady_clock::now();
+    const auto run = [&](auto&& step) {
+      for (std::size_t i = first; i <= last_u; ++i) {
+        semlio::Scan scan = seq.read(i);
+        facts.push_back(step(scan, i));
+        if (!opt.quiet && (i - first) % 100 == 0) std::fprintf(stderr, "[semlio_lio] frame %zu/%zu\n", i, last_u);
+      }
+    };
+
+    const auto run_front = [&](auto make) {
+      if (opt.imu == "oxts") {
+        semlio::LidarInertialOdometry lio(make, lc);
+        std::size_t next = 0;
+        SE3d T_prev;
+        run([&](semlio::Scan& scan, std::size_t i) {
+          const double until = scan.stamp_s + lc.imu_time_offset_s + lc.sweep_period_s + 1e-6;
+          while (next < imu.size() && imu[next].stamp_s <= until) lio.push_imu(imu[next++]);
+          const semlio::LidarInertialReport r = lio.process(scan);
+          if (r.initialized && !init_frame) init_frame = i;
+          FrameFacts f;
+          f.T_map_lidar = r.T_map_lidar;
+          f.status = semlio::to_string(r.frame.status);
+          f.degenerate = r.frame.solve.degenerate();
+          if (f.degenerate) f.degenerate_along_track = along_track(r.frame, T_prev, r.frame.T_map_lidar);
+          f.imu_predicted = r.prediction == semlio::PredictionSource::kImu;
+          f.imu_fallback = r.imu_fallback;
+          f.total_ms = r.frame.timings.total_ms;
+          T_prev = r.frame.T_map_lidar;
+          return f;
+        });
+      } else {
+        auto odometry = make();
+        SE3d T_prev;
+        run([&](semlio::Scan& scan, std::size_t /*i*/) {
+          if (deskew && !scan.has_times()) semlio::assign_times_from_azimuth(scan);
+          const semlio::FrameReport r = odometry.process(scan);
+          FrameFacts f;
+          f.T_map_lidar = r.T_map_lidar;
+          f.status = semlio::to_string(r.status);
+          f.degenerate = r.solve.degenerate();
+          if (f.degenerate) f.degenerate_along_track = along_track(r, T_prev, r.T_map_lidar);
+          f.total_ms = r.timings.total_ms;
+          T_prev = r.T_map_lidar;
+          return f;
+        });
+      }
+    };
+    const semlio::ScanLabels seg{};
+    const auto s = settings;
+    // Lidar-only with deskew: the front end's own deskew slot (constant velocity).
+    if (opt.imu == "none" && deskew) {
+      if (opt.preset == "baseline") {
+        run_front([&] {
+          return semlio::Odometry(seg, semlio::NearestK(s.nearest),
+                                  semlio::LoamResiduals{semlio::PointToLine(s.line), semlio::PointToPlane(s.plane)},
+                                  semlio::PoseThreshold(s.pose_threshold), s.odometry, semlio::ConstantVelocityDeskew{});
+        });
+      } else {
+        run_front([&] {
+          return semlio::Odometry(
+              seg, semlio::NormalConsistency(s.normal),
+              semlio::LoamResiduals{semlio::SemanticWeighted<semlio::PointToLine>(semlio::PointToLine(s.line)),
+                                    semlio::SemanticWeighted<semlio::PointToPlane>(semlio::PointToPlane(s.plane))},
+              semlio::SemanticAdaptive(s.semantic_keyframes), s.odometry, semlio::ConstantVelocityDeskew{});
+        });
+      }
+    } else if (opt.preset == "baseline") {
+      run_front([&] { return semlio::make_baseline_odometry(seg, s); });
+    } else {
+      run_front([&] { return semlio::make_full_odometry(seg, s); });
+    }
+    const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    // Outputs.
+    fs::create_directories(opt.out);
+    std::vector<SE3d> poses;
+    for (const FrameFacts& f : facts) poses.push_back(f.T_map_lidar);
+    const std::optional<SE3d> Tr = seq.calibration() ? seq.calibration()->T_cam0_velo : std::nullopt;
+    semlio::io::write_kitti_poses((fs::path(opt.out) / "poses.txt").string(),
+                                  Tr ? semlio::io::lidar_to_camera(poses, *Tr) : poses);
+    std::optional<semlio::eval::AteReport> ate;
+    if (seq.has_ground_truth()) {
+      std::vector<SE3d> gt_all = seq.ground_truth_lidar();
+      std::vector<SE3d> gt(gt_all.begin() + static_cast<std::ptrdiff_t>(first),
+                           gt_all.begin() + static_cast<std::ptrdiff_t>(last_u) + 1);
+      const SE3d T0 = gt.front().inverse();
+      for (SE3d& T : gt) T = T0 * T;
+      ate = semlio::eval::ate(gt, poses);
+    }
+    std::size_t degenerate = 0;
+    std::size_t degenerate_along = 0;
+    double along_sum = 0.0;
+    std::size_t imu_predicted = 0;
+    std::size_t fallbacks = 0;
+    for (const FrameFacts& f : facts) {
+      if (f.degenerate) {
+        ++degenerate;
+        along_sum += f.degenerate_along_track;
+        degenerate_along += f.degenerate_along_track > 0.9 ? 1U : 0U;
+      }
+      imu_predicted += f.imu_predicted ? 1U : 0U;
+      fallbacks += f.imu_fallback ? 1U : 0U;
+    }
+    std::ofstream js(fs::path(opt.out) / "report.json");
+    semlio_examples::JsonWriter j(js);
+    j.begin_object();
+    j.field("sequence", seq.directory()).field("imu", opt.imu).field("deskew", opt.deskew).field("preset", opt.preset);
+    j.field("frames", static_cast<double>(facts.size())).field("wall_s", wall_s);
+    j.field("imu_time_offset_s", lc.imu_time_offset_s);
+    j.field("initialized_at_frame", init_frame ? static_cast<double>(*init_frame) : -1.0);
+    j.field("imu_predicted_frames", static_cast<double>(imu_predicted));
+    j.field("imu_fallback_frames", static_cast<double>(fallbacks));
+    j.field("degenerate_frames", static_cast<double>(degenerate));
+    j.field("degenerate_along_track_frames", static_cast<double>(degenerate_along));
+    j.field("degenerate_along_track_mean_abs_cos", degenerate > 0 ? along_sum / static_cast<double>(degenerate) : 0.0);
+    if (ate) {
+      j.key("ate").begin_object();
+      j.field("rmse_m", ate->rmse_m).field("mean_m", ate->mean_m).field("max_m", ate->max_m);
+      j.end_object();
+    }
+    j.end_object();
+    js << "\n";
+    if (!opt.quiet) {
+      std::printf("semlio_lio  %s  imu=%s deskew=%s preset=%s  frames %zu  %.1f s\n", seq.directory().c_str(),
+                  opt.imu.c_str(), opt.deskew.c_str(), opt.preset.c_str(), facts.size(), wall_s);
+      if (opt.imu == "oxts") {
+        std::printf("  initialised at frame %ld, IMU-predicted frames %zu, IMU fallbacks %zu\n",
+                    init_frame ? static_cast<long>(*init_frame) : -1L, imu_predicted, fallbacks);
+      }
+      std::printf("  degenerate frames %zu (%zu along the direction of travel)\n", degenerate, degenerate_along);
+      if (ate) std::printf("  ATE RMSE %.3f m (mean %.3f, max %.3f)\n", ate->rmse_m, ate->mean_m, ate->max_m);
+    }
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "semlio_lio: " << e.what() << "\n";
+    return 1;
+  }
+}

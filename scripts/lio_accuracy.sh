@@ -1,0 +1,67 @@
+#!/usr/bin/env bash
+# Must-hold runs of issue 7 (lidar-inertial; not CI):
+#   scripts/lio_accuracy.sh [FRAMES] [SEED]      (defaults: 300 frames, seed 1)
+# 1. Simulated highway drive, distortion on: lidar-inertial (IMU deskew)
+#    against lidar-only (constant-velocity deskew, and no deskew); the
+#    lidar-inertial ATE must be >= 20 % lower than the better lidar-only one.
+#    The front end's degeneracy along the direction of travel is reported.
+# 2. Simulated urban drive, distortion on: lidar-inertial with deskew must be
+#    no worse than lidar-only on the undistorted scans of the same drive
+#    (semlio_simulate --distortion off, same seed).
+# Writes results/lio_<FRAMES>_<SEED>/ (reports; scans are deleted afterwards).
+# Needs the semlio_lio example: BUILD_DIR's examples/ must list the lio area
+# (examples/lio.cmake); LIO_BIN overrides the binary's path.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+FRAMES=${1:-300}
+SEED=${2:-1}
+BUILD_DIR=${BUILD_DIR:-build}
+OUT=results/lio_${FRAMES}_${SEED}
+SIM=${SIM_BIN:-$BUILD_DIR/examples/semlio_simulate}
+LIO=${LIO_BIN:-$BUILD_DIR/examples/semlio_lio}
+if [[ -z "${SIM_BIN:-}" || -z "${LIO_BIN:-}" ]]; then
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
+  cmake --build "$BUILD_DIR" -j2 --target semlio_simulate semlio_lio
+fi
+mkdir -p "$OUT"
+
+"$SIM" --world highway --traffic none --frames "$FRAMES" --seed "$SEED" --distortion on --out "$OUT/highway_raw"
+"$LIO" --sequence "$OUT/highway_raw" --imu oxts --deskew on --out "$OUT/highway_lio" --quiet
+"$LIO" --sequence "$OUT/highway_raw" --imu none --deskew on --out "$OUT/highway_lidar_deskew" --quiet
+"$LIO" --sequence "$OUT/highway_raw" --imu none --deskew off --out "$OUT/highway_lidar" --quiet
+
+"$SIM" --world urban --traffic none --frames "$FRAMES" --seed "$SEED" --distortion on --out "$OUT/urban_raw"
+"$SIM" --world urban --traffic none --frames "$FRAMES" --seed "$SEED" --distortion off --out "$OUT/urban_clean"
+"$LIO" --sequence "$OUT/urban_raw" --imu oxts --deskew on --out "$OUT/urban_lio" --quiet
+"$LIO" --sequence "$OUT/urban_clean" --imu none --deskew off --out "$OUT/urban_lidar_clean" --quiet
+
+rm -rf "$OUT"/*_raw/velodyne "$OUT"/*_clean/velodyne
+/usr/bin/python3 - "$OUT" <<'PY'
+import json, sys
+out = sys.argv[1]
+def rep(name):
+    with open(f"{out}/{name}/report.json") as f:
+        return json.load(f)
+ok = True
+hl, hd, hn = rep("highway_lio"), rep("highway_lidar_deskew"), rep("highway_lidar")
+best = min(hd["ate"]["rmse_m"], hn["ate"]["rmse_m"])
+gain = 1.0 - hl["ate"]["rmse_m"] / best
+print("highway, distortion on          ATE RMSE [m]")
+print(f"  lidar-inertial (IMU deskew)    {hl['ate']['rmse_m']:.3f}   init frame {hl['initialized_at_frame']:.0f}, IMU fallbacks {hl['imu_fallback_frames']:.0f}")
+print(f"  lidar-only (CV deskew)         {hd['ate']['rmse_m']:.3f}")
+print(f"  lidar-only (no deskew)         {hn['ate']['rmse_m']:.3f}")
+print(f"  improvement over the better lidar-only: {100 * gain:.1f} % (must be >= 20 %)")
+for name, r in (("lidar-only CV deskew", hd), ("lidar-only no deskew", hn), ("lidar-inertial", hl)):
+    print(f"  degenerate frames ({name}): {r['degenerate_frames']:.0f} of {r['frames']:.0f}, "
+          f"{r['degenerate_along_track_frames']:.0f} along the road (|cos| > 0.9), mean |cos| {r['degenerate_along_track_mean_abs_cos']:.2f}")
+ok &= gain >= 0.20
+ul, uc = rep("urban_lio"), rep("urban_lidar_clean")
+print("urban")
+print(f"  lidar-inertial + deskew, distorted scans   {ul['ate']['rmse_m']:.3f}")
+print(f"  lidar-only, undistorted scans              {uc['ate']['rmse_m']:.3f}")
+urban_ok = ul["ate"]["rmse_m"] <= uc["ate"]["rmse_m"] * 1.05 + 0.02
+print(f"  no worse (within 5 % + 2 cm): {'yes' if urban_ok else 'NO'}")
+ok &= urban_ok
+print("MUST-HOLD:", "PASS" if ok else "FAIL")
+sys.exit(0 if ok else 1)
+PY
