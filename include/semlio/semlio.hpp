@@ -28,8 +28,11 @@
 #include <semlio/search/voxel_grid.hpp>
 
 #include <semlio/imu/deskew.hpp>
+#include <semlio/imu/imu_factor.hpp>
+#include <semlio/imu/inertial_init.hpp>
 #include <semlio/imu/preintegration.hpp>
 #include <semlio/solve/gauss_newton.hpp>
+#include <semlio/graph/inertial_graph.hpp>
 #include <semlio/graph/pose_graph.hpp>
 
 #include <semlio/associate/nearest_k.hpp>
@@ -37,7 +40,11 @@
 #include <semlio/associate/normal_consistency_reference.hpp>
 #include <semlio/keyframe/pose_threshold.hpp>
 #include <semlio/keyframe/semantic_adaptive.hpp>
+#include <semlio/loop/loop_closer.hpp>
+#include <semlio/loop/radius_detector.hpp>
+#include <semlio/loop/scan_context.hpp>
 #include <semlio/map/local_map.hpp>
+#include <semlio/map/semantic_map.hpp>
 #include <semlio/residual/point_to_line.hpp>
 #include <semlio/residual/point_to_plane.hpp>
 #include <semlio/residual/robust.hpp>
@@ -46,9 +53,11 @@
 #include <semlio/segment/scan_labels.hpp>
 
 #include <semlio/pipeline/interpolate.hpp>
+#include <semlio/pipeline/lidar_inertial.hpp>
 #include <semlio/pipeline/odometry.hpp>
 #include <semlio/pipeline/presets.hpp>
 #include <semlio/pipeline/registration.hpp>
+#include <semlio/pipeline/slam.hpp>
 
 #include <semlio/eval/ate.hpp>
 #include <semlio/eval/kitti_metric.hpp>
