@@ -41,10 +41,8 @@ struct Problem {
 const Problem& kitti() {
   static const Problem p = [] {
     Problem q;
-    const auto map_features = semlio_test::kitti_features("kitti/sequences/00/velodyne/000000.bin");
+    semlio_test::build_kitti_pair_map(q.map);
     const auto scan = semlio_test::kitti_features("kitti/sequences/00/velodyne/000001.bin");
-    q.map.add_keyframe(SE3d(), map_features.corners, map_features.surfaces);
-    q.map.build(Eigen::Vector3d::Zero());
     q.surfaces = scan.surfaces.points;
     q.corners = scan.corners.points;
     q.surface_labels.assign(scan.surfaces.points.size(), semlio::Class::kUnlabeled);

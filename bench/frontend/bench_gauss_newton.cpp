@@ -49,10 +49,8 @@ semlio::FeatureSet as_set(const semlio_test::FeatureCloud& c) {
 const KittiPair& kitti() {
   static const KittiPair p = [] {
     KittiPair q;
-    const auto map_features = semlio_test::kitti_features("kitti/sequences/00/velodyne/000000.bin");
+    semlio_test::build_kitti_pair_map(q.map);
     const auto scan = semlio_test::kitti_features("kitti/sequences/00/velodyne/000001.bin");
-    q.map.add_keyframe(SE3d(), map_features.corners, map_features.surfaces);
-    q.map.build(Eigen::Vector3d::Zero());
     q.corners = as_set(scan.corners);
     q.surfaces = as_set(scan.surfaces);
     q.T_init = semlio_test::kitti_T_0_1();

@@ -79,6 +79,15 @@ inline semlio::SE3d kitti_T_0_1() {
   return poses.at(0).inverse() * poses.at(1);
 }
 
+/// Adds the LOAM features of KITTI 00 scan 000000 (identity pose) to `map`
+/// and builds it: the map side of the real pair that the associator tests and
+/// the front-end benchmarks query with scan 000001's features.
+inline void build_kitti_pair_map(semlio::LocalMap& map) {
+  const KittiFeatures f = kitti_features("kitti/sequences/00/velodyne/000000.bin");
+  map.add_keyframe(semlio::SE3d(), f.corners, f.surfaces);
+  map.build(Eigen::Vector3d::Zero());
+}
+
 /// Synthetic street: the same world sampled as a map (map frame) and as a
 /// scan (scan frame, seen from T_map_scan).
 struct StreetScene {
