@@ -1,0 +1,31 @@
+# Short versions of the measurement scripts in scripts/ (label "scripts"):
+# the README's numbers come from the long versions, CI proves on every change
+# that each script still runs end to end against this build and that its
+# checks pass where a short run can decide them. Needs the example binaries.
+if(NOT SEMLIO_BUILD_EXAMPLES)
+  return()
+endif()
+find_program(SEMLIO_BASH bash REQUIRED)
+set(script_out "${CMAKE_CURRENT_BINARY_DIR}/script_runs")
+set(script_env SKIP_BUILD=1 "BUILD_DIR=${PROJECT_BINARY_DIR}")
+
+# name, then the command line after `bash scripts/`
+function(semlio_add_script_test name)
+  add_test(NAME script_${name}
+           COMMAND ${CMAKE_COMMAND} -E env ${script_env} "OUT=${script_out}/${name}" ${ARGN}
+           WORKING_DIRECTORY "${PROJECT_SOURCE_DIR}")
+  set_tests_properties(script_${name} PROPERTIES LABELS scripts TIMEOUT 900)
+endfunction()
+
+# The main job on a 20-frame drive (both presets, side-by-side table).
+semlio_add_script_test(demo ${CMAKE_COMMAND} -E env FRAMES=20 ${SEMLIO_BASH} scripts/demo.sh)
+# Issue 5's accuracy run on 20 frames.
+semlio_add_script_test(accuracy_sim ${SEMLIO_BASH} scripts/accuracy_sim.sh 20 none labels 1)
+# Forward/backward consistency on the 3 real KITTI raw frames of tests/data
+# (the bounds need the 22-frame snippet; here every run must complete).
+semlio_add_script_test(kitti_raw_consistency ${CMAKE_COMMAND} -E env REPORT_ONLY=1
+  ${SEMLIO_BASH} scripts/kitti_raw_consistency.sh tests/data/kitti_raw/snippet_22)
+# Every bundled g2o graph reaches its reference chi2 within 1e-6 (a real check).
+semlio_add_script_test(pgo_validate ${SEMLIO_BASH} scripts/pgo_validate.sh "${PROJECT_BINARY_DIR}")
+# GeometricSegmenter mIoU table, 2 frames per world.
+semlio_add_script_test(segmenter_miou ${SEMLIO_BASH} scripts/segmenter_miou.sh 2 1)
