@@ -5,7 +5,10 @@
 //   bench_frame_time --sequence DIR [--preset baseline|full] [--labels none|labels|predictions]
 //                    [--last N] [--repeat R]
 // Prints one line per frame: index keyframe wall_ms cpu_ms solve_ms map_ms
-// features_ms preprocess_ms iterations, then nothing else (the script summarises).
+// features_ms preprocess_ms iterations, then diagnostics of the surface map:
+// map points, axes fitted so far on this map build, and the surface
+// association's NearestCache hits and refills so far -- nothing else (the
+// script summarises).
 #include <time.h>
 
 #include <chrono>
@@ -38,8 +41,11 @@ void run(Odometry odom, const std::vector<semlio::Scan>& scans, std::size_t repe
       const semlio::FrameReport rep = o.process(scan);
       const double wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count();
       const double cpu = thread_cpu_ms() - c0;
-      std::printf("%zu %d %.4f %.4f %.4f %.4f %.4f %.4f %d\n", i, rep.keyframe ? 1 : 0, wall, cpu, rep.timings.solve_ms,
-                  rep.timings.map_ms, rep.timings.features_ms, rep.timings.preprocess_ms, rep.solve.iterations);
+      const semlio::FeatureMap& surfaces = o.local_map().surfaces();
+      const semlio::NearestCache& cache = o.problem().surface_cache();
+      std::printf("%zu %d %.4f %.4f %.4f %.4f %.4f %.4f %d %zu %zu %zu %zu\n", i, rep.keyframe ? 1 : 0, wall, cpu,
+                  rep.timings.solve_ms, rep.timings.map_ms, rep.timings.features_ms, rep.timings.preprocess_ms,
+                  rep.solve.iterations, surfaces.size(), surfaces.fitted_axes(), cache.hits(), cache.refills());
     }
   }
 }

@@ -95,6 +95,57 @@ SE3d perturbed(const SE3d& T, double dx, double dyaw) {
   return T * SE3d::exp(xi);
 }
 
+// Poses as Gauss-Newton visits them: from `start` towards `goal` in halving
+// steps (centimetres, then millimetres, then sub-millimetre), then a jump back
+// to `start` and the goal again.
+std::vector<SE3d> converging_poses(const SE3d& start, const SE3d& goal) {
+  const Eigen::Matrix<double, 6, 1> xi = (start.inverse() * goal).log();
+  std::vector<SE3d> poses;
+  for (int k = 0; k <= 10; ++k) {
+    const double f = 1.0 - std::pow(0.5, k);
+    poses.push_back(start * SE3d::exp(f * xi));
+  }
+  poses.push_back(start);
+  poses.push_back(goal);
+  return poses;
+}
+
+// Along `poses`, with ONE NearestCache carried from call to call:
+// NormalConsistency equals the literal reference and NearestK equals its
+// uncached self, every time; the cache answers most late queries.
+void require_cached_equals_uncached(const FeatureMap& map, const std::vector<Eigen::Vector3f>& features,
+                                    const std::vector<SE3d>& poses) {
+  semlio::NormalConsistency fast;
+  semlio::NormalConsistencyReference ref;
+  semlio::NearestK nearest;
+  fast.set_map(map);
+  fast.set_scan(features);
+  ref.set_map(map);
+  ref.set_scan(features);
+  nearest.set_map(map);
+  nearest.set_scan(features);
+  semlio::NearestCache nc_cache;
+  semlio::NearestCache nk_cache;
+  Correspondences a;
+  Correspondences b;
+  std::size_t matched = 0;
+  for (std::size_t p = 0; p < poses.size(); ++p) {
+    INFO("pose " << p);
+    fast.associate(poses[p], a, nc_cache);
+    ref.associate(poses[p], b);
+    REQUIRE(first_difference(a, b) == a.size());
+    matched += summarise(a).matched;
+    nearest.associate(poses[p], a, nk_cache);
+    nearest.associate(poses[p], b);
+    REQUIRE(first_difference(a, b) == a.size());
+  }
+  CHECK(matched > features.size());  // a real overlap, not a vacuous equality
+  // Most of the 13 poses are close to the previous one: lists were reused.
+  CHECK(nc_cache.hits() > nc_cache.refills());
+  CHECK(nk_cache.hits() > nk_cache.refills());
+  CHECK(nc_cache.refills() >= features.size() / 2);  // the first pose fills (nearly) every slot
+}
+
 }  // namespace
 
 TEST_CASE("NormalConsistency equals the literal Algorithm 1 on the real KITTI pair", "[associate]") {
@@ -167,6 +218,70 @@ TEST_CASE("NormalConsistency equals the reference without candidate lists", "[as
   REQUIRE(local.surfaces().candidate_list() == 0);
   require_fast_equals_reference(local.surfaces(), scene.scan_surfaces.points,
                                 {scene.T_map_scan, perturbed(scene.T_map_scan, 0.3, 0.02)}, true);
+}
+
+TEST_CASE("Associators with a NearestCache equal the uncached ones along Gauss-Newton poses", "[associate]") {
+  // The cross-iteration candidate reuse must not change one match: real KITTI
+  // pair (map 000000, features 000001 from identity to the ground truth),
+  // simulated urban sweeps, and a synthetic street.
+  const auto query = semlio_test::kitti_features("kitti/sequences/00/velodyne/000001.bin");
+  semlio::LocalMap local;
+  semlio_test::build_kitti_pair_map(local);
+  const SE3d guess = semlio_test::kitti_T_0_1();
+  const auto kitti_poses = converging_poses(perturbed(guess, 0.15, 0.01), guess);
+  require_cached_equals_uncached(local.surfaces(), query.surfaces.points, kitti_poses);
+  require_cached_equals_uncached(local.corners(), query.corners.points, kitti_poses);
+
+  const auto pair = semlio_test::sim_urban_pair();
+  semlio::LocalMap sim;
+  sim.add_keyframe(SE3d(), pair.map_features.corners, pair.map_features.surfaces);
+  sim.build(Eigen::Vector3d::Zero());
+  const auto sim_poses = converging_poses(perturbed(pair.T_map_scan, 0.2, 0.01), pair.T_map_scan);
+  require_cached_equals_uncached(sim.surfaces(), pair.scan_features.surfaces.points, sim_poses);
+  require_cached_equals_uncached(sim.corners(), pair.scan_features.corners.points, sim_poses);
+
+  const auto scene = semlio_test::street_scene(3);
+  semlio::LocalMap street;
+  street.add_keyframe(SE3d(), scene.map_corners, scene.map_surfaces);
+  street.build(Eigen::Vector3d::Zero());
+  require_cached_equals_uncached(street.surfaces(), scene.scan_surfaces.points,
+                                 converging_poses(perturbed(scene.T_map_scan, 0.3, 0.02), scene.T_map_scan));
+}
+
+TEST_CASE("A NearestCache is not trusted across a map rebuild or another scan", "[associate]") {
+  // Same cache object, then the map is rebuilt in place from other points and
+  // the associator gets other features: results must still equal the reference.
+  const auto scene = semlio_test::street_scene(1);
+  const auto other = semlio_test::street_scene(2);
+  semlio::LocalMap local;
+  local.add_keyframe(SE3d(), scene.map_corners, scene.map_surfaces);
+  local.build(Eigen::Vector3d::Zero());
+  semlio::NormalConsistency fast;
+  semlio::NormalConsistencyReference ref;
+  semlio::NearestCache cache;
+  Correspondences a;
+  Correspondences b;
+  fast.set_map(local.surfaces());
+  fast.set_scan(scene.scan_surfaces.points);
+  fast.associate(scene.T_map_scan, a, cache);
+  const std::size_t first_refills = cache.refills();
+  CHECK(first_refills > 0);
+  // Rebuild the same LocalMap (same FeatureMap objects) over another scene.
+  semlio::LocalMap rebuilt;
+  local = rebuilt;
+  local.add_keyframe(SE3d(), other.map_corners, other.map_surfaces);
+  local.build(Eigen::Vector3d::Zero());
+  for (const auto* features : {&scene.scan_surfaces.points, &other.scan_surfaces.points}) {
+    fast.set_map(local.surfaces());
+    fast.set_scan(*features);
+    ref.set_map(local.surfaces());
+    ref.set_scan(*features);
+    fast.associate(other.T_map_scan, a, cache);
+    ref.associate(other.T_map_scan, b);
+    CHECK(first_difference(a, b) == a.size());
+    CHECK(summarise(a).matched > 0);
+  }
+  CHECK(cache.refills() > first_refills);  // the stale lists were refilled
 }
 
 TEST_CASE("Normal consistency skips a nearer candidate on the wrong plane", "[associate]") {

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <thread>
 #include <cstddef>
 #include <vector>
 
@@ -204,6 +205,132 @@ TEST_CASE("FeatureMap::nearest equals a k-d tree k-NN cut at the gate", "[map]")
       }
     }
   }
+}
+
+TEST_CASE("FeatureMap::nearest with a NearestCache equals a k-d tree k-NN cut at the gate", "[map]") {
+  // Each query walks in shrinking steps (as Gauss-Newton moves a feature) and
+  // sometimes jumps; one cache slot per walk. Every answer must equal the
+  // k-d tree's, for several k and gates, and the walk must mostly hit.
+  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.4);
+  semlio::FeatureMap map(semlio::FeatureKind::kPlane);
+  map.build(cloud.points, {}, 10, 32);
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<std::size_t> pick(0, cloud.points.size() - 1);
+  std::normal_distribution<float> jitter(0.0F, 1.0F);
+  constexpr std::size_t kWalks = 400;
+  for (const std::size_t list : {std::size_t{13}, std::size_t{30}}) {
+    for (const double gate : {0.5, 1.0, std::numeric_limits<double>::infinity()}) {
+      for (const std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{13}}) {
+        if (k > list) continue;
+        semlio::NearestCache cache;
+        cache.reset(kWalks, list);
+        std::size_t mismatches = 0;
+        for (std::size_t w = 0; w < kWalks; ++w) {
+          Eigen::Vector3f q = cloud.points[pick(rng)] + 0.3F * Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng));
+          float step = 0.08F;
+          for (int it = 0; it < 8; ++it) {
+            if (it == 5) q += Eigen::Vector3f(2.0F, 0.0F, 0.0F);  // a jump: the list must not be trusted
+            std::array<std::uint32_t, 64> ia{};
+            std::array<float, 64> da{};
+            std::array<std::uint32_t, 64> ib{};
+            std::array<float, 64> db{};
+            const std::size_t na = map.nearest(q, k, gate * gate, ia.data(), da.data(), cache, w);
+            std::size_t nb = map.tree().knn(q, k, ib.data(), db.data());
+            while (nb > 0 && !(static_cast<double>(db[nb - 1]) <= gate * gate)) --nb;
+            bool same = na == nb;
+            for (std::size_t j = 0; same && j < na; ++j) same = ia[j] == ib[j] && da[j] == db[j];
+            mismatches += same ? 0U : 1U;
+            q += step * Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng));
+            step *= 0.4F;
+          }
+        }
+        INFO("list " << list << " gate " << gate << " k " << k);
+        CHECK(mismatches == 0);
+        if (2 * k <= list) CHECK(cache.hits() > cache.refills());  // a list with slack is reused
+        CHECK(cache.refills() >= kWalks);  // every slot was filled once at least
+      }
+    }
+  }
+}
+
+TEST_CASE("FeatureMap's lazy axes and candidate lists equal an eager fit", "[map]") {
+  // Axes and lists are computed on first use; whatever the access order
+  // (axis first, list first via nearest(), or all at once), every axis must
+  // equal a direct shape_neighbours-NN fit bit for bit -- what an eager build
+  // and NormalConsistencyReference compute -- and a rebuild must forget them.
+  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.4);
+  for (const semlio::FeatureKind kind : {semlio::FeatureKind::kPlane, semlio::FeatureKind::kLine}) {
+    semlio::FeatureMap map(kind);
+    map.build(cloud.points, {}, 10, 32);
+    REQUIRE(map.size() > 1000);
+    CHECK(map.fitted_axes() == 0);  // nothing fitted by build()
+    // Lists first: queries at every 7th map point fill lists (and their axes).
+    std::array<std::uint32_t, 64> idx{};
+    std::array<float, 64> d2{};
+    for (std::size_t i = 0; i < map.size(); i += 7) (void)map.nearest(map.points()[i], 15, 1.0, idx.data(), d2.data());
+    const std::size_t after_lists = map.fitted_axes();
+    CHECK(after_lists > 0);
+    CHECK(after_lists < map.size());
+    // Then single axes in a scattered order, then all of them.
+    std::size_t mismatches = 0;
+    for (std::size_t i = 0; i < map.size(); i += 3) {
+      const Eigen::Vector3f expected =
+          semlio::detail::neighbourhood_axis(map.tree(), kind, map.points()[i], map.shape_neighbours());
+      mismatches += map.axis(i) == expected ? 0U : 1U;
+    }
+    const std::vector<Eigen::Vector3f>& all = map.axes();
+    REQUIRE(all.size() == map.size());
+    CHECK(map.fitted_axes() == map.size());
+    for (std::size_t i = 0; i < map.size(); ++i) {
+      const Eigen::Vector3f expected =
+          semlio::detail::neighbourhood_axis(map.tree(), kind, map.points()[i], map.shape_neighbours());
+      mismatches += all[i] == expected && map.axis(i) == expected ? 0U : 1U;
+    }
+    CHECK(mismatches == 0);
+    // A rebuild over other points forgets every cached axis and list.
+    std::vector<Eigen::Vector3f> moved = cloud.points;
+    for (auto& p : moved) p.z() += 0.05F * p.x();
+    map.build(moved, {}, 10, 32);
+    CHECK(map.fitted_axes() == 0);
+    for (std::size_t i = 0; i < map.size(); i += 5) {
+      mismatches += map.axis(i) == semlio::detail::neighbourhood_axis(map.tree(), kind, map.points()[i], 10) ? 0U : 1U;
+    }
+    CHECK(mismatches == 0);
+  }
+}
+
+TEST_CASE("FeatureMap's lazy caches are filled consistently by concurrent queries", "[map]") {
+  // Four threads query the same map (const) at once, each in its own order;
+  // every result must equal the single-threaded one.
+  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.4);
+  semlio::FeatureMap reference(semlio::FeatureKind::kPlane);
+  reference.build(cloud.points, {}, 10, 32);
+  const std::vector<Eigen::Vector3f> expected = reference.axes();
+  semlio::FeatureMap shared(semlio::FeatureKind::kPlane);
+  shared.build(cloud.points, {}, 10, 32);
+  std::array<std::size_t, 4> mismatches{};
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      std::array<std::uint32_t, 64> ia{};
+      std::array<float, 64> da{};
+      std::array<std::uint32_t, 64> ib{};
+      std::array<float, 64> db{};
+      const std::size_t n = shared.size();
+      for (std::size_t j = 0; j < n; ++j) {
+        const std::size_t i = (t % 2 == 0) ? (j * 7 + t) % n : n - 1 - (j * 3 + t) % n;
+        mismatches[t] += shared.axis(i) == expected[i] ? 0U : 1U;
+        const std::size_t na = shared.nearest(shared.points()[i], 15, 1.0, ia.data(), da.data());
+        const std::size_t nb = reference.nearest(shared.points()[i], 15, 1.0, ib.data(), db.data());
+        mismatches[t] += na == nb && std::equal(ia.begin(), ia.begin() + static_cast<std::ptrdiff_t>(na), ib.begin())
+                             ? 0U
+                             : 1U;
+      }
+    });
+  }
+  for (auto& th : threads) th.join();
+  for (const std::size_t m : mismatches) CHECK(m == 0);
+  CHECK(shared.axes() == expected);
 }
 
 TEST_CASE("LocalMap rejects bad settings and inputs", "[map]") {

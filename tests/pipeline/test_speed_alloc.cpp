@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 
 #include <atomic>
+#include <cstdint>
 #include <cstddef>
 #include <cstdlib>
 #include <new>
@@ -22,6 +23,7 @@
 #include <semlio/io/kitti.hpp>
 #include <semlio/keyframe/pose_threshold.hpp>
 #include <semlio/pipeline/odometry.hpp>
+#include <semlio/pipeline/presets.hpp>
 #include <semlio/residual/point_to_line.hpp>
 #include <semlio/residual/point_to_plane.hpp>
 #include <semlio/segment/scan_labels.hpp>
@@ -122,38 +124,23 @@ TEST_CASE("Counting allocator counts only inside its guard", "[pipeline][speed]"
   CHECK(outside.size() + after.size() == 200);
 }
 
-TEST_CASE("Odometry allocates nothing on non-keyframe frames after warm-up (ring inference aside)",
-          "[pipeline][speed]") {
-  // The sensor moves back and forth between 0 and 0.9 m in 0.3 m steps, so
-  // after the first keyframe no frame becomes one (PoseThreshold: 1 m), and
-  // every later frame repeats a scan already seen: warm-up has grown every
-  // buffer to the size those frames need.
+namespace {
+
+// The sensor moves back and forth between 0 and 0.9 m in 0.3 m steps, so
+// after the first keyframe no frame becomes one (1 m thresholds), and every
+// later frame repeats a scan already seen: warm-up has grown every buffer to
+// the size those frames need. Requires zero operator new calls per frame.
+template <typename Odom>
+void require_no_allocation_after_warm_up(Odom odom) {
   const semlio::Scan base =
       semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
   const std::vector<double> offsets{0.0, 0.3, 0.6, 0.9, 0.6, 0.3};
-  semlio::Odometry odom(semlio::NoLabels{}, semlio::NearestK{},
-                        semlio::LoamResiduals{semlio::PointToLine{}, semlio::PointToPlane{}}, semlio::PoseThreshold{},
-                        semlio::OdometryConfig{.kitti_vertical_correction = true});
   std::vector<semlio::Scan> frames;
   for (int pass = 0; pass < 3; ++pass) {
     for (const double d : offsets) {
       frames.push_back(shifted_scan(base, d, 0.1 * static_cast<double>(frames.size())));
     }
   }
-  // Ring inference (features/rings.hpp, not part of this area) still grows a
-  // local vector of ring starts per call; count that alone on the same scan
-  // and require the rest of the frame to allocate nothing.
-  std::size_t ring_allocations = 0;
-  {
-    semlio::Scan s = base;
-    semlio::preprocess(s, semlio::PreprocessConfig{});
-    const semlio::SensorModel sensor = semlio::SensorModel::hdl64e();
-    semlio::infer_rings(s, sensor, semlio::RingConfig{});  // s.rings now has its capacity
-    const CountAllocations guard;
-    semlio::infer_rings(s, sensor, semlio::RingConfig{});
-    ring_allocations = CountAllocations::count();
-  }
-  WARN("allocations per frame inside infer_rings: " << ring_allocations);
   // Warm-up: one period plus one frame, so that every offset has gone through
   // the solve path once (frame 0 only initialises the map).
   const std::size_t warm_up = offsets.size() + 1;
@@ -181,9 +168,56 @@ TEST_CASE("Odometry allocates nothing on non-keyframe frames after warm-up (ring
       CHECK((report.status == semlio::OdometryStatus::kTracked ||
              report.status == semlio::OdometryStatus::kDegenerate));
       CHECK(report.T_map_lidar.translation().x() == Approx(offsets[i % offsets.size()]).margin(0.05));
-      CHECK(allocations == ring_allocations);
+      CHECK(allocations == 0);
       ++measured;
     }
   }
   CHECK(measured == 2 * offsets.size() - 1);
+}
+
+}  // namespace
+
+TEST_CASE("Ring inference with a workspace allocates nothing once it has grown", "[pipeline][speed]") {
+  semlio::Scan s = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  semlio::preprocess(s, semlio::PreprocessConfig{});
+  const semlio::SensorModel sensor = semlio::SensorModel::hdl64e();
+  std::vector<std::size_t> workspace;
+  const semlio::RingReport first = semlio::infer_rings(s, sensor, semlio::RingConfig{}, workspace);
+  const std::vector<std::uint16_t> rings = s.rings;
+  std::size_t allocations = 0;
+  semlio::RingReport again;
+  {
+    const CountAllocations guard;
+    again = semlio::infer_rings(s, sensor, semlio::RingConfig{}, workspace);
+    allocations = CountAllocations::count();
+  }
+  CHECK(allocations == 0);
+  CHECK(first.used == semlio::RingMethod::kPointOrder);
+  CHECK(again.order_rings == 64);
+  CHECK(s.rings == rings);
+  // The workspace-free overload gives the same rings.
+  semlio::infer_rings(s, sensor);
+  CHECK(s.rings == rings);
+}
+
+TEST_CASE("Baseline odometry allocates nothing on non-keyframe frames after warm-up", "[pipeline][speed]") {
+  semlio::PipelineSettings settings;
+  settings.odometry.kitti_vertical_correction = true;
+  require_no_allocation_after_warm_up(semlio::make_baseline_odometry(semlio::NoLabels{}, settings));
+}
+
+TEST_CASE("Full odometry allocates nothing on non-keyframe frames after warm-up", "[pipeline][speed]") {
+  // Normal consistency (scan-side k-d tree rebuilt per frame in reused
+  // buffers, lazy map axes, cached candidate lists), semantic weights and
+  // semantic keyframes.
+  semlio::PipelineSettings settings;
+  settings.odometry.kitti_vertical_correction = true;
+  require_no_allocation_after_warm_up(semlio::make_full_odometry(semlio::NoLabels{}, settings));
+}
+
+TEST_CASE("Odometry with NearestK and no deskew slot allocates nothing after warm-up", "[pipeline][speed]") {
+  require_no_allocation_after_warm_up(
+      semlio::Odometry(semlio::NoLabels{}, semlio::NearestK{},
+                       semlio::LoamResiduals{semlio::PointToLine{}, semlio::PointToPlane{}}, semlio::PoseThreshold{},
+                       semlio::OdometryConfig{.kitti_vertical_correction = true}));
 }

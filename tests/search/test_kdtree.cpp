@@ -1,8 +1,10 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <thread>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include <semlio/search/kdtree.hpp>
+#include <semlio/search/small_kdtree.hpp>
 
 namespace {
 
@@ -86,6 +89,98 @@ TEST_CASE("KdTree3f knn and radius equal brute force on random clouds", "[search
     const auto queries = random_cloud(30, rng, 6.0F);
     for (const auto& q : queries) check_queries(tree, pts, q);
     check_queries(tree, pts, pts[0]);  // query on a point: itself first at distance 0
+  }
+}
+
+TEST_CASE("KdTree3f bounded knn equals brute force cut at the bound", "[search]") {
+  // The bound is inclusive; tested also exactly at existing distances (ties at
+  // the bound) and on a grid, where many points share a distance.
+  std::mt19937 rng(3);
+  std::vector<Vector3f> pts = random_cloud(2000, rng, 5.0F);
+  for (int x = 0; x < 6; ++x) {
+    for (int y = 0; y < 6; ++y) pts.emplace_back(0.5F * static_cast<float>(x), 0.5F * static_cast<float>(y), 0.0F);
+  }
+  const semlio::KdTree3f tree(pts);
+  std::uniform_real_distribution<float> u(-7.0F, 7.0F);
+  std::size_t checked = 0;
+  for (int t = 0; t < 300; ++t) {
+    const Vector3f q = t % 3 == 0 ? Vector3f(0.5F, 0.5F, 0.0F) : Vector3f(u(rng), u(rng), u(rng));
+    const auto ref = brute(pts, q);
+    for (const std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{30}}) {
+      for (const float cap : {0.0F, 0.25F, 1.0F, ref[3].first, ref[10].first, 1e9F}) {
+        std::vector<std::uint32_t> idx(k);
+        std::vector<float> d(k);
+        const std::size_t n = tree.knn(q, k, idx.data(), d.data(), cap);
+        std::size_t expected = 0;
+        while (expected < k && expected < ref.size() && ref[expected].first <= cap) ++expected;
+        REQUIRE(n == expected);
+        for (std::size_t i = 0; i < n; ++i) {
+          CHECK(idx[i] == ref[i].second);
+          CHECK(d[i] == ref[i].first);
+        }
+        ++checked;
+      }
+    }
+  }
+  CHECK(checked == 300U * 3U * 6U);
+  std::uint32_t i0 = 0;
+  float d0 = 0.0F;
+  CHECK(tree.knn(Vector3f::Zero(), 1, &i0, &d0, -1.0F) == 0);  // negative bound: nothing
+}
+
+TEST_CASE("SmallKdTree3f knn equals KdTree3f knn, also after rebuilds", "[search]") {
+  // Random clouds of several sizes (rebuilt into the same tree), plus a grid
+  // with many equal distances and duplicated points: identical indices and
+  // distances, in the same (distance, index) order.
+  std::mt19937 rng(21);
+  semlio::SmallKdTree3f small;
+  std::size_t compared = 0;
+  for (const std::size_t n : {std::size_t{3000}, std::size_t{1}, std::size_t{9}, std::size_t{700}, std::size_t{0},
+                              std::size_t{4000}}) {
+    std::vector<Vector3f> pts = random_cloud(n, rng, 4.0F);
+    if (n > 100) {
+      for (int x = 0; x < 5; ++x) {
+        for (int y = 0; y < 5; ++y) pts.emplace_back(0.25F * static_cast<float>(x), 0.25F * static_cast<float>(y), 1.0F);
+      }
+      pts.push_back(pts.front());  // a duplicate point
+    }
+    const semlio::KdTree3f big(pts);
+    small.build(pts);
+    REQUIRE(small.size() == pts.size());
+    std::uniform_real_distribution<float> u(-5.0F, 5.0F);
+    for (int t = 0; t < 200; ++t) {
+      const Vector3f q = t % 4 == 0 && !pts.empty() ? pts[static_cast<std::size_t>(t) % pts.size()]
+                         : t % 4 == 1              ? Vector3f(0.5F, 0.5F, 1.0F)
+                                                   : Vector3f(u(rng), u(rng), u(rng));
+      for (const std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{15}, std::size_t{40}}) {
+        std::vector<std::uint32_t> ia(k);
+        std::vector<float> da(k);
+        std::vector<std::uint32_t> ib(k);
+        std::vector<float> db(k);
+        const std::size_t na = small.knn(q, k, ia.data(), da.data());
+        const std::size_t nb = big.knn(q, k, ib.data(), db.data());
+        REQUIRE(na == nb);
+        for (std::size_t i = 0; i < na; ++i) {
+          REQUIRE(ia[i] == ib[i]);
+          REQUIRE(da[i] == db[i]);
+        }
+        ++compared;
+      }
+    }
+  }
+  CHECK(compared == 6U * 200U * 4U);
+}
+
+TEST_CASE("next_up equals std::nextafter on squared distances", "[search]") {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(0.0F, 100.0F);
+  for (const float d : {0.0F, -0.0F, 1e-45F, 1.0F, 3.4e38F, std::numeric_limits<float>::max(),
+                        std::numeric_limits<float>::infinity()}) {
+    CHECK(semlio::detail::next_up(d) == std::nextafter(d, std::numeric_limits<float>::infinity()));
+  }
+  for (int t = 0; t < 10000; ++t) {
+    const float d = u(rng) * u(rng);
+    REQUIRE(semlio::detail::next_up(d) == std::nextafter(d, std::numeric_limits<float>::infinity()));
   }
 }
 

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -50,12 +51,7 @@ class NearestK {
     std::array<std::uint32_t, kMaxKeptMatches> idx{};
     std::array<float, kMaxKeptMatches> d2{};
     const std::size_t n = map_->tree().knn(q_map, static_cast<std::size_t>(config_.k), idx.data(), d2.data());
-    const double gate2 = config_.max_distance_m * config_.max_distance_m;
-    for (std::size_t j = 0; j < n && detail::within_gate(d2[j], gate2); ++j) {
-      detail::push_match(m, idx[j], j + 1);
-    }
-    detail::enforce_min(map_->kind(), m);
-    return m;
+    return finish(idx.data(), d2.data(), n);
   }
 
   /// One FeatureMatches per bound feature at pose T_map_scan into out
@@ -69,10 +65,52 @@ class NearestK {
     for (std::size_t i = 0; i < n; ++i) out[i] = match(detail::feature_to_map(R, t, (*features_)[i]));
   }
 
+  /// As associate(T_map_scan, out) -- the same matches -- reusing each
+  /// feature's candidate list in `cache` across calls (Gauss-Newton
+  /// iterations; FeatureMap's file comment proves the reuse exact). `cache`
+  /// is (re)sized as needed; stale slots are refilled, never trusted.
+  void associate(const SE3d& T_map_scan, Correspondences& out, NearestCache& cache) const {
+    const std::size_t n = features_ == nullptr ? 0 : features_->size();
+    detail::reset_matches(n, out);
+    if (map_ == nullptr || map_->empty()) return;
+    const std::size_t len = cache_list_len();
+    if (cache.slots() < n || cache.list_len() != len) cache.reset(std::max(n, cache.slots()), len);
+    const Eigen::Matrix3d R = T_map_scan.rotation();
+    const Eigen::Vector3d& t = T_map_scan.translation();
+    const auto k = static_cast<std::size_t>(config_.k);
+    // nearest() returns the k-NN cut at the gate, as match() computes it.
+    const double gate2 = config_.max_distance_m * config_.max_distance_m;
+    std::array<std::uint32_t, kMaxKeptMatches> idx{};
+    std::array<float, kMaxKeptMatches> d2{};
+    for (std::size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3f q = detail::feature_to_map(R, t, (*features_)[i]);
+      const std::size_t found = map_->nearest(q, k, gate2, idx.data(), d2.data(), cache, i);
+      out[i] = finish(idx.data(), d2.data(), found);
+    }
+  }
+
+  /// Length of the per-feature lists associate(..., cache) keeps: k plus a
+  /// margin that absorbs a few centimetres of motion.
+  [[nodiscard]] std::size_t cache_list_len() const noexcept {
+    const auto k = static_cast<std::size_t>(config_.k);
+    return k + std::max<std::size_t>(k, 8);
+  }
+
   /// The settings.
   [[nodiscard]] const Config& config() const noexcept { return config_; }
 
  private:
+  // The gated, rank-ordered matches from the k nearest (idx, d2: n of them).
+  [[nodiscard]] FeatureMatches finish(const std::uint32_t* idx, const float* d2, std::size_t n) const {
+    FeatureMatches m;
+    const double gate2 = config_.max_distance_m * config_.max_distance_m;
+    for (std::size_t j = 0; j < n && detail::within_gate(d2[j], gate2); ++j) {
+      detail::push_match(m, idx[j], j + 1);
+    }
+    detail::enforce_min(map_->kind(), m);
+    return m;
+  }
+
   Config config_;
   const FeatureMap* map_ = nullptr;
   const std::vector<Eigen::Vector3f>* features_ = nullptr;

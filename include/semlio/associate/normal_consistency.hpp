@@ -9,7 +9,7 @@
 /// for surfaces, line directions for corners, eq. 3-6 over 10 points).
 ///
 /// Why it is fast yet equal to the literal NormalConsistencyReference:
-///  - map axes are cached per map point when the map is built (FeatureMap);
+///  - map axes are cached per map point, fitted on first use (FeatureMap);
 ///  - scan axes are computed once per frame in set_scan(), not per candidate
 ///    nor per Gauss-Newton iteration; per feature only a rotation R * n1;
 ///  - the 15 candidates come from FeatureMap::nearest(): a 1-NN anchor plus
@@ -17,12 +17,18 @@
 ///    bound (falling back to a 15-NN k-d tree search where the bound fails),
 ///    so a feature costs about a 1-NN query and 32 distance evaluations
 ///    instead of a 15-NN query (~2x a 5-NN one);
+///  - across Gauss-Newton iterations (associate() with a NearestCache) each
+///    feature keeps its own candidate list from the previous iteration and
+///    reuses it while a triangle-inequality bound proves it still holds the
+///    exact 15 nearest (FeatureMap file comment): late iterations move a
+///    feature by millimetres and need no tree search at all;
 ///  - both use the same helpers (detail::neighbourhood_axis, feature_to_map,
 ///    axes_agree, within_gate) and the same (distance, index) candidate order,
 ///    so their floating-point decisions coincide.
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -34,7 +40,7 @@
 #include <semlio/concepts.hpp>
 #include <semlio/lie/se3.hpp>
 #include <semlio/map/feature_map.hpp>
-#include <semlio/search/kdtree.hpp>
+#include <semlio/search/small_kdtree.hpp>
 
 namespace semlio {
 
@@ -85,6 +91,7 @@ class NormalConsistency {
 
   /// Binds the frame's features (scan frame, non-owning) and computes each
   /// feature's axis from its scan_neighbours nearest features, once per frame.
+  /// Allocation-free once its buffers have grown (SmallKdTree3f).
   void set_scan(const std::vector<Eigen::Vector3f>& points_scan) {
     features_ = &points_scan;
     scan_tree_.build(points_scan);
@@ -94,39 +101,30 @@ class NormalConsistency {
   /// Matches of feature i at pose (R, t) = T_map_scan. Precondition: a
   /// non-empty map and features are bound, i < features.size().
   [[nodiscard]] FeatureMatches match(std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) const {
-    FeatureMatches m;
-    const Eigen::Vector3f& axis = scan_axes_[i];
-    if (axis.isZero()) return m;  // unusable scan axis: every candidate would fail
-    const Eigen::Vector3f q = detail::feature_to_map(R, t, (*features_)[i]);
-    const Eigen::Vector3d n1 = R * axis.cast<double>();
-    const double gate2 = config_.max_distance_m * config_.max_distance_m;
-    const auto keep = static_cast<std::size_t>(config_.keep);
-    const std::vector<Eigen::Vector3f>& axes = map_->axes();
-
-    std::array<std::uint32_t, kMaxCandidates> idx{};
-    std::array<float, kMaxCandidates> d2{};
-    // Line 3: the candidates inside the gate, in (distance, index) order.
-    const std::size_t n =
-        map_->nearest(q, static_cast<std::size_t>(config_.candidates), gate2, idx.data(), d2.data());
-    // Lines 4-10 with both axes cached: keep agreeing candidates until 5 are kept.
-    for (std::size_t j = 0; j < n; ++j) {
-      if (detail::axes_agree(n1, axes[idx[j]], cos_max_)) {
-        detail::push_match(m, idx[j], j + 1);
-        if (m.count == keep) return m;
-      }
-    }
-    detail::enforce_min(map_->kind(), m);
-    return m;
+    return match_impl(i, R, t, nullptr);
   }
 
   /// One FeatureMatches per bound feature at pose T_map_scan into out.
   void associate(const SE3d& T_map_scan, Correspondences& out) const {
+    associate_impl(T_map_scan, out, nullptr);
+  }
+
+  /// As associate(T_map_scan, out) -- the same matches -- reusing each
+  /// feature's candidate list in `cache` across calls (Gauss-Newton
+  /// iterations); `cache` is (re)sized as needed and may be shared by calls
+  /// with other scans or maps (stale slots are refilled, never trusted).
+  void associate(const SE3d& T_map_scan, Correspondences& out, NearestCache& cache) const {
     const std::size_t n = features_ == nullptr ? 0 : features_->size();
-    detail::reset_matches(n, out);
-    if (map_ == nullptr || map_->empty()) return;
-    const Eigen::Matrix3d R = T_map_scan.rotation();
-    const Eigen::Vector3d& t = T_map_scan.translation();
-    for (std::size_t i = 0; i < n; ++i) out[i] = match(i, R, t);
+    const std::size_t len = cache_list_len();
+    if (cache.slots() < n || cache.list_len() != len) cache.reset(std::max(n, cache.slots()), len);
+    associate_impl(T_map_scan, out, &cache);
+  }
+
+  /// Length of the per-feature lists associate(..., cache) keeps: the 15
+  /// candidates plus a margin that absorbs a few centimetres of motion.
+  [[nodiscard]] std::size_t cache_list_len() const noexcept {
+    const auto k = static_cast<std::size_t>(config_.candidates);
+    return std::min<std::size_t>(k + std::max<std::size_t>(k, 8), static_cast<std::size_t>(kMaxCandidateList));
   }
 
   /// Scan-frame axis of each bound feature (zero = unusable), for inspection.
@@ -145,11 +143,47 @@ class NormalConsistency {
     }
   }
 
+  FeatureMatches match_impl(std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
+                            NearestCache* cache) const {
+    FeatureMatches m;
+    const Eigen::Vector3f& axis = scan_axes_[i];
+    if (axis.isZero()) return m;  // unusable scan axis: every candidate would fail
+    const Eigen::Vector3f q = detail::feature_to_map(R, t, (*features_)[i]);
+    const Eigen::Vector3d n1 = R * axis.cast<double>();
+    const double gate2 = config_.max_distance_m * config_.max_distance_m;
+    const auto keep = static_cast<std::size_t>(config_.keep);
+    const auto k = static_cast<std::size_t>(config_.candidates);
+
+    std::array<std::uint32_t, kMaxCandidates> idx{};
+    std::array<float, kMaxCandidates> d2{};
+    // Line 3: the candidates inside the gate, in (distance, index) order.
+    const std::size_t n = cache != nullptr ? map_->nearest(q, k, gate2, idx.data(), d2.data(), *cache, i)
+                                           : map_->nearest(q, k, gate2, idx.data(), d2.data());
+    // Lines 4-10 with both axes cached: keep agreeing candidates until 5 are kept.
+    for (std::size_t j = 0; j < n; ++j) {
+      if (detail::axes_agree(n1, map_->axis(idx[j]), cos_max_)) {
+        detail::push_match(m, idx[j], j + 1);
+        if (m.count == keep) return m;
+      }
+    }
+    detail::enforce_min(map_->kind(), m);
+    return m;
+  }
+
+  void associate_impl(const SE3d& T_map_scan, Correspondences& out, NearestCache* cache) const {
+    const std::size_t n = features_ == nullptr ? 0 : features_->size();
+    detail::reset_matches(n, out);
+    if (map_ == nullptr || map_->empty()) return;
+    const Eigen::Matrix3d R = T_map_scan.rotation();
+    const Eigen::Vector3d& t = T_map_scan.translation();
+    for (std::size_t i = 0; i < n; ++i) out[i] = match_impl(i, R, t, cache);
+  }
+
   Config config_;
   double cos_max_;
   const FeatureMap* map_ = nullptr;
   const std::vector<Eigen::Vector3f>* features_ = nullptr;
-  KdTree3f scan_tree_;
+  SmallKdTree3f scan_tree_;  // rebuilt per frame without allocating; equal results to KdTree3f
   std::vector<Eigen::Vector3f> scan_axes_;
   FeatureKind axes_kind_ = FeatureKind::kPlane;
 };

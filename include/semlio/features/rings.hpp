@@ -117,15 +117,17 @@ inline void ring_starts_from_order(const std::vector<Eigen::Vector3f>& pts,
   }
 }
 
-/// Fills scan.rings (0 = lowest beam) by config.method. Throws ConfigError for
-/// an invalid sensor and ValueError when kPointOrder finds a ring count other
-/// than sensor.beams() (the message names both counts).
-inline RingReport infer_rings(Scan& scan, const SensorModel& sensor, const RingConfig& config = {}) {
+/// Fills scan.rings (0 = lowest beam) by config.method, using `begins` as the
+/// workspace for ring starts (reused: no allocation once it has grown; the
+/// per-frame pipeline keeps one). Throws ConfigError for an invalid sensor and
+/// ValueError when kPointOrder finds a ring count other than sensor.beams()
+/// (the message names both counts).
+inline RingReport infer_rings(Scan& scan, const SensorModel& sensor, const RingConfig& config,
+                              std::vector<std::size_t>& begins) {
   sensor.validate();
   RingReport report;
   scan.rings.resize(scan.size());
   if (config.method != RingMethod::kElevation) {
-    std::vector<std::size_t> begins;
     ring_starts_from_order(scan.points, begins);
     report.order_rings = begins.size();
     if (begins.size() == sensor.beams()) {
@@ -162,6 +164,13 @@ inline RingReport infer_rings(Scan& scan, const SensorModel& sensor, const RingC
   }
   report.used = RingMethod::kElevation;
   return report;
+}
+
+/// As infer_rings(scan, sensor, config, workspace) with a local workspace
+/// (allocates a little per call).
+inline RingReport infer_rings(Scan& scan, const SensorModel& sensor, const RingConfig& config = {}) {
+  std::vector<std::size_t> begins;
+  return infer_rings(scan, sensor, config, begins);
 }
 
 /// Fills scan.times_s with each point's time since sweep start from its

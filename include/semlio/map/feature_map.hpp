@@ -2,12 +2,24 @@
 /// \file
 /// One searchable feature map (corners or surfaces) in the map frame: points,
 /// their labels, a k-d tree, and the shape axis of each point (surface normal
-/// or line direction, eq. 3-6 over its nearest map points) cached once at
-/// build, so that Algorithm 1 never refits a map neighbourhood per frame.
+/// or line direction, eq. 3-6 over its nearest map points), so that
+/// Algorithm 1 never refits a map neighbourhood per frame.
+///
+/// Lazy shapes (why a keyframe's map rebuild is cheap): build() only stores
+/// the points and builds the k-d tree. A point's axis and its candidate list
+/// (below) are computed the first time an associator reads them and are kept
+/// until the next build(): most map points are never read (NearestK reads
+/// none; Algorithm 1 reads the neighbourhoods of the current scan's features
+/// only). The values are exactly those an eager build would store -- the same
+/// k-NN query ((distance, index) order) and the same fit -- so laziness
+/// changes the cost, never a result. The caches are filled from const member
+/// functions through per-point atomic states (empty -> busy -> ready): one
+/// thread publishes each entry, any other thread that finds it not ready
+/// computes the same value for itself, so concurrent const queries stay safe.
 ///
 /// Candidate lists (why Algorithm 1 costs about as much as a 5-NN query):
-/// build() also stores, per map point m, its K nearest map points (K = 32 by
-/// default) and the distance R_m to the K-th. A query q then needs only a 1-NN
+/// per map point m, its K nearest map points (K = 32 by default) and the
+/// distance R_m to the K-th. A query q then needs only a 1-NN
 /// k-d tree search for an anchor m (distance a = |q - m|): by the triangle
 /// inequality every map point within R_m - a of q is in m's list, so when the
 /// k-th candidate found in the list (or the distance gate, if fewer lie inside
@@ -19,16 +31,29 @@
 /// contraction in one and not the other; default x86-64 flags have none).
 /// Measured on KITTI 00 LOAM features: ~6% of queries fall back; cost per
 /// 15-candidate query ~1.3x a 5-NN k-d tree query instead of ~2x. Memory: K
-/// indices (4 bytes each) per map point; build: one K-NN query per point.
+/// indices (4 bytes each) per map point, plus one state byte per point for
+/// the axis and one for the list.
+///
+/// Repeated queries (NearestCache): Gauss-Newton re-associates the same
+/// features at poses that differ by centimetres, then millimetres. A cache
+/// slot keeps, per feature, its own L nearest map points at the position q0
+/// where it was last filled, and the distance R0 to the L-th. At a new
+/// position q (moved by d = |q - q0|) every map point within R0 - d of q is in
+/// that list (triangle inequality), so the same exactness test as above
+/// applies with q0 as the anchor: when it holds, the answer costs L distance
+/// evaluations and no tree search; otherwise the slot is refilled by one
+/// L-NN query at q, whose first k entries are the exact answer.
 
 #include <Eigen/Core>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <thread>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,6 +81,11 @@ inline constexpr int kMaxShapeNeighbours = 32;
 /// Longest per-point candidate list (FeatureMap::build).
 inline constexpr int kMaxCandidateList = 64;
 
+/// How far beyond the distance gate a NearestCache refill searches [m]: a
+/// feature may move this far (less the rounding margin) before a list whose
+/// L-th entry lies beyond the bound must be refilled.
+inline constexpr double kNearestCacheSlackM = 0.5;
+
 namespace detail {
 
 /// The unit shape axis of a fitted neighbourhood: the normal for planes, the
@@ -69,9 +99,10 @@ inline Eigen::Vector3f shape_axis(FeatureKind kind, std::size_t n, const LocalSh
   return axis.cast<float>();
 }
 
-/// Axis of the tree points idx[0..n-1] (eq. 3-6).
-inline Eigen::Vector3f neighbourhood_axis(const KdTree3f& tree, FeatureKind kind, const std::uint32_t* idx,
-                                          std::size_t n) {
+/// Axis of the tree points idx[0..n-1] (eq. 3-6). Tree: KdTree3f or
+/// SmallKdTree3f (anything with point(i) and knn(q, k, idx, sq_dist)).
+template <typename Tree>
+Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const std::uint32_t* idx, std::size_t n) {
   const LocalShape shape =
       fit_local_shape(n, [&](std::size_t i) -> const Eigen::Vector3f& { return tree.point(idx[i]); });
   return shape_axis(kind, n, shape);
@@ -79,8 +110,8 @@ inline Eigen::Vector3f neighbourhood_axis(const KdTree3f& tree, FeatureKind kind
 
 /// Axis of the neighbourhood of query q in tree: eq. 3-6 over the k nearest
 /// tree points (q itself included when it is a tree point). Allocation-free.
-inline Eigen::Vector3f neighbourhood_axis(const KdTree3f& tree, FeatureKind kind,
-                                          const Eigen::Vector3f& q, int k) {
+template <typename Tree>
+Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const Eigen::Vector3f& q, int k) {
   std::array<std::uint32_t, kMaxShapeNeighbours> idx{};
   std::array<float, kMaxShapeNeighbours> d2{};
   const std::size_t n = tree.knn(q, static_cast<std::size_t>(k), idx.data(), d2.data());
@@ -98,6 +129,17 @@ inline float nanoflann_sq_distance(const Eigen::Vector3f& q, const Eigen::Vector
   const float dz = q.z() - p.z();
   r += dz * dz;
   return r;
+}
+
+/// Largest float c with (double)c <= max_sq_dist (inf when unlimited), so that
+/// for a float squared distance d: d <= c exactly when (double)d <= max_sq_dist.
+inline float float_gate(double max_sq_dist) {
+  if (!(max_sq_dist < static_cast<double>(std::numeric_limits<float>::max()))) {
+    return max_sq_dist >= 0.0 ? std::numeric_limits<float>::infinity() : -1.0F;
+  }
+  float c = static_cast<float>(max_sq_dist);
+  if (static_cast<double>(c) > max_sq_dist) c = std::nextafter(c, -std::numeric_limits<float>::infinity());
+  return c;
 }
 
 /// Inserts (d, i) into the ascending (distance, index) list idx/d2 of size
@@ -128,19 +170,79 @@ inline bool axes_agree(const Eigen::Vector3d& n_scan_map, const Eigen::Vector3f&
 
 }  // namespace detail
 
-/// A feature map in the map frame with per-point labels and cached shape axes.
-/// Thread-safety: const member functions may run concurrently; build() not.
+class FeatureMap;
+
+namespace detail {
+
+/// A process-wide unique id for each FeatureMap::build() (never 0), so that a
+/// NearestCache can tell a rebuilt map -- even one at the same address -- from
+/// the build its lists refer to.
+inline std::uint64_t next_map_build_id() {
+  static std::atomic<std::uint64_t> counter{0};
+  return counter.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
+}  // namespace detail
+
+/// Per-feature candidate lists reused across repeated nearest() queries of
+/// the same features (see the file comment). One slot per feature; bound to
+/// one map build (a rebuilt or different map empties it). Not thread-safe:
+/// one cache per thread. Reuses its buffers (no allocation once grown).
+class NearestCache {
+ public:
+  /// Empties every slot and sizes the cache for `slots` features with lists
+  /// of `list_len` map points (list_len <= kMaxCandidateList).
+  void reset(std::size_t slots, std::size_t list_len) {
+    list_len_ = std::min<std::size_t>(list_len, static_cast<std::size_t>(kMaxCandidateList));
+    slots_ = slots;
+    q0_.resize(slots);
+    radius_m_.assign(slots, -1.0F);
+    count_.resize(slots);
+    lists_.resize(slots * list_len_);
+    generation_ = 0;
+    hits_ = 0;
+    refills_ = 0;
+  }
+  /// Empties every slot (keeps the sizes).
+  void clear() { reset(slots_, list_len_); }
+  /// Number of slots.
+  [[nodiscard]] std::size_t slots() const noexcept { return slots_; }
+  /// Map points per slot.
+  [[nodiscard]] std::size_t list_len() const noexcept { return list_len_; }
+  /// Queries answered from a slot's list / by a k-d tree refill, since the last reset (diagnostics).
+  [[nodiscard]] std::size_t hits() const noexcept { return hits_; }
+  /// See hits().
+  [[nodiscard]] std::size_t refills() const noexcept { return refills_; }
+
+ private:
+  friend class FeatureMap;
+  std::size_t slots_ = 0;
+  std::size_t list_len_ = 0;
+  std::vector<Eigen::Vector3f> q0_;       // where each slot was filled [m, map frame]
+  std::vector<float> radius_m_;           // distance to its last list entry (inf: whole map; < 0: empty)
+  std::vector<std::uint8_t> count_;       // entries in the list
+  std::vector<std::uint32_t> lists_;      // list_len_ map indices per slot, (distance, index) order at q0
+  std::uint64_t generation_ = 0;          // FeatureMap build id the lists refer to (0: none)
+  std::size_t hits_ = 0;
+  std::size_t refills_ = 0;
+};
+
+/// A feature map in the map frame with per-point labels and lazily cached
+/// shape axes and candidate lists (see the file comment).
+/// Thread-safety: const member functions may run concurrently (the lazy
+/// caches are filled through atomic per-point states); build() not.
 class FeatureMap {
  public:
   /// Empty map of the given kind.
   explicit FeatureMap(FeatureKind kind = FeatureKind::kPlane) : kind_(kind) {}
 
   /// Replaces the content: points [m, map frame] and labels (same length, or
-  /// empty = all unlabeled); builds the k-d tree, caches each point's axis
-  /// from its `shape_neighbours` nearest map points (itself included) and, when
-  /// candidate_list > 0, its max(candidate_list, shape_neighbours) nearest map
-  /// points for nearest(). Throws ValueError on a length mismatch,
-  /// shape_neighbours outside [2, 32] or candidate_list outside [0, 64].
+  /// empty = all unlabeled); builds the k-d tree. Each point's axis (from its
+  /// `shape_neighbours` nearest map points, itself included) and, when
+  /// candidate_list > 0, its list of max(candidate_list, shape_neighbours)
+  /// nearest map points for nearest() are computed on first use (file
+  /// comment). Throws ValueError on a length mismatch, shape_neighbours
+  /// outside [2, 32] or candidate_list outside [0, 64]. Reuses its buffers.
   void build(std::vector<Eigen::Vector3f> points, std::vector<Class> labels, int shape_neighbours,
              int candidate_list = 32) {
     if (!labels.empty() && labels.size() != points.size()) {
@@ -160,26 +262,17 @@ class FeatureMap {
     labels_ = std::move(labels);
     tree_.build(points);
     const std::size_t n = tree_.size();
-    axes_.resize(n);
     // The first shape_neighbours of a longer k-NN query equal the shorter query
-    // ((distance, index) order), so the axes match a direct 10-NN fit exactly.
-    const std::size_t list =
-        candidate_list == 0 ? 0 : std::min<std::size_t>(n, static_cast<std::size_t>(std::max(candidate_list, shape_neighbours)));
-    const std::size_t k = std::max(list, static_cast<std::size_t>(shape_neighbours));
-    list_len_ = list;
-    lists_.resize(n * list);
-    list_radius_m_.resize(list == 0 ? 0 : n);
-    const bool whole_map = list == n;  // the list holds every map point
-    std::array<std::uint32_t, kMaxCandidateList> idx{};
-    std::array<float, kMaxCandidateList> d2{};
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t found = tree_.knn(tree_.point(i), k, idx.data(), d2.data());
-      axes_[i] = detail::neighbourhood_axis(tree_, kind_, idx.data(),
-                                            std::min(found, static_cast<std::size_t>(shape_neighbours)));
-      if (list == 0) continue;
-      std::copy_n(idx.begin(), list, lists_.begin() + static_cast<std::ptrdiff_t>(i * list));
-      list_radius_m_[i] = whole_map ? std::numeric_limits<float>::infinity() : std::sqrt(d2[list - 1]);
-    }
+    // ((distance, index) order), so a list query also yields the exact axis.
+    list_len_ = candidate_list == 0
+                    ? 0
+                    : std::min<std::size_t>(n, static_cast<std::size_t>(std::max(candidate_list, shape_neighbours)));
+    axes_.resize(n);
+    axis_state_.assign(n, kEmpty);
+    lists_.resize(n * list_len_);
+    list_radius_m_.resize(list_len_ == 0 ? 0 : n);
+    list_state_.assign(list_len_ == 0 ? 0 : n, kEmpty);
+    generation_ = detail::next_map_build_id();
   }
 
   /// The k nearest map points of q within the gate (squared distance <=
@@ -194,7 +287,9 @@ class FeatureMap {
       std::uint32_t anchor = 0;
       float anchor_d2 = 0.0F;
       tree_.knn(q, 1, &anchor, &anchor_d2);
-      const std::uint32_t* list = lists_.data() + static_cast<std::size_t>(anchor) * list_len_;
+      std::array<std::uint32_t, kMaxCandidateList> own{};
+      float radius_f = 0.0F;
+      const std::uint32_t* list = candidates_of(anchor, own.data(), radius_f);
       const std::vector<Eigen::Vector3f>& pts = tree_.points();
       std::size_t count = 0;
       for (std::size_t j = 0; j < list_len_; ++j) {
@@ -204,15 +299,105 @@ class FeatureMap {
       // Everything within `reach` of q lies in the anchor's list, so the list
       // answer is exact when the k-th candidate (or, with fewer, the gate) is
       // nearer than that. The margin covers float rounding of the distances [m].
-      const double radius = static_cast<double>(list_radius_m_[anchor]);
+      const auto radius = static_cast<double>(radius_f);
       const double reach = radius - std::sqrt(static_cast<double>(anchor_d2));
       const double needed = count == k ? std::sqrt(static_cast<double>(sq_dist[k - 1])) : std::sqrt(max_sq_dist_m2);
       const double margin = 1e-4 + 1e-6 * (std::isfinite(radius) ? radius : 0.0);
       if (needed + margin < reach) return count;
     }
-    std::size_t n = tree_.knn(q, k, idx, sq_dist);
+    // The k-d tree's k-NN cut at the gate, searched only inside the gate.
+    return tree_.knn(q, k, idx, sq_dist, detail::float_gate(max_sq_dist_m2));
+  }
+
+  /// As nearest(q, k, ...) -- the very same result -- for the feature of
+  /// `slot` in `cache`, answered from that slot's list when the exactness test
+  /// holds, else by refilling the slot with one k-d tree query (file comment).
+  /// Precondition: slot < cache.slots(), k <= cache.list_len(). Allocation-free.
+  std::size_t nearest(const Eigen::Vector3f& q, std::size_t k, double max_sq_dist_m2, std::uint32_t* idx,
+                      float* sq_dist, NearestCache& cache, std::size_t slot) const {
+    if (k == 0 || empty()) return 0;
+    const std::size_t len = cache.list_len_;
+    if (k > len) return nearest(q, k, max_sq_dist_m2, idx, sq_dist);
+    if (cache.generation_ != generation_) {  // filled against another map build: forget it
+      std::fill(cache.radius_m_.begin(), cache.radius_m_.end(), -1.0F);
+      cache.generation_ = generation_;
+    }
+    std::uint32_t* list = cache.lists_.data() + slot * len;
+    const float radius_f = cache.radius_m_[slot];
+    if (radius_f >= 0.0F) {
+      const std::vector<Eigen::Vector3f>& pts = tree_.points();
+      const std::size_t stored = cache.count_[slot];
+      std::size_t count = 0;
+      for (std::size_t j = 0; j < stored; ++j) {
+        const float d = detail::nanoflann_sq_distance(q, pts[list[j]]);
+        if (static_cast<double>(d) <= max_sq_dist_m2) count = detail::insert_by_distance_index(d, list[j], idx, sq_dist, count, k);
+      }
+      const auto radius = static_cast<double>(radius_f);
+      const double moved = std::sqrt(static_cast<double>(detail::nanoflann_sq_distance(q, cache.q0_[slot])));
+      const double reach = radius - moved;
+      const double needed = count == k ? std::sqrt(static_cast<double>(sq_dist[k - 1])) : std::sqrt(max_sq_dist_m2);
+      const double margin = 1e-4 + 1e-6 * (std::isfinite(radius) ? radius : 0.0);
+      if (needed + margin < reach) {
+        ++cache.hits_;
+        return count;
+      }
+    }
+    // Refill at q: the L nearest within the gate plus a slack for motion (one
+    // bounded k-d tree query); its first k entries are the exact answer. The
+    // list then holds every map point within `radius` of q: the L-th
+    // distance when L were found, else the search bound itself.
+    ++cache.refills_;
+    std::array<float, kMaxCandidateList> d2{};
+    const double slack_m = kNearestCacheSlackM;
+    const double bound = std::isfinite(max_sq_dist_m2) ? std::sqrt(max_sq_dist_m2) + slack_m : max_sq_dist_m2;
+    const float bound2 = detail::float_gate(bound * bound);
+    const std::size_t found = tree_.knn(q, len, list, d2.data(), bound2);
+    cache.q0_[slot] = q;
+    cache.count_[slot] = static_cast<std::uint8_t>(found);
+    cache.radius_m_[slot] = found == len ? std::sqrt(d2[len - 1])
+                                         : std::sqrt(bound2);  // inf when unbounded (then found = size())
+    std::size_t n = std::min(found, k);
+    std::copy_n(list, n, idx);
+    std::copy_n(d2.data(), n, sq_dist);
     while (n > 0 && !(static_cast<double>(sq_dist[n - 1]) <= max_sq_dist_m2)) --n;
     return n;
+  }
+
+  /// Unit axis of map point i (normal or line direction; zero = unusable),
+  /// fitted on first use over its shape_neighbours() nearest map points and
+  /// cached until the next build(). Allocation-free. Precondition: i < size().
+  [[nodiscard]] Eigen::Vector3f axis(std::size_t i) const {
+    std::atomic_ref<std::uint8_t> state(axis_state_[i]);
+    if (state.load(std::memory_order_acquire) == kReady) return axes_[i];
+    std::array<std::uint32_t, kMaxShapeNeighbours> idx{};
+    std::array<float, kMaxShapeNeighbours> d2{};
+    const std::size_t found =
+        tree_.knn(tree_.point(i), static_cast<std::size_t>(shape_neighbours_), idx.data(), d2.data());
+    const Eigen::Vector3f a = detail::neighbourhood_axis(tree_, kind_, idx.data(), found);
+    publish_axis(i, a);
+    return a;
+  }
+
+  /// Every point's axis (as axis(i)); computes all those not cached yet on
+  /// first call, so prefer axis(i) on hot paths.
+  [[nodiscard]] const std::vector<Eigen::Vector3f>& axes() const {
+    for (std::size_t i = 0; i < axes_.size(); ++i) {
+      std::atomic_ref<std::uint8_t> state(axis_state_[i]);
+      if (state.load(std::memory_order_acquire) == kReady) continue;
+      (void)axis(i);
+      // Another thread may have claimed the entry first: wait until it is written.
+      while (state.load(std::memory_order_acquire) != kReady) std::this_thread::yield();
+    }
+    return axes_;
+  }
+
+  /// Number of axes computed since the last build() (cost diagnostics).
+  [[nodiscard]] std::size_t fitted_axes() const {
+    std::size_t c = 0;
+    for (std::size_t i = 0; i < axis_state_.size(); ++i) {
+      c += std::atomic_ref<std::uint8_t>(axis_state_[i]).load(std::memory_order_relaxed) == kReady ? 1U : 0U;
+    }
+    return c;
   }
 
   /// Line (corners) or plane (surfaces).
@@ -225,9 +410,7 @@ class FeatureMap {
   [[nodiscard]] const std::vector<Eigen::Vector3f>& points() const { return tree_.points(); }
   /// Label of each map point.
   [[nodiscard]] const std::vector<Class>& labels() const noexcept { return labels_; }
-  /// Cached unit axis per point (normal or line direction; zero = unusable).
-  [[nodiscard]] const std::vector<Eigen::Vector3f>& axes() const noexcept { return axes_; }
-  /// The neighbourhood size the axes were fitted over.
+  /// The neighbourhood size the axes are fitted over.
   [[nodiscard]] int shape_neighbours() const noexcept { return shape_neighbours_; }
   /// The search structure over points().
   [[nodiscard]] const KdTree3f& tree() const noexcept { return tree_; }
@@ -247,14 +430,59 @@ class FeatureMap {
   }
 
  private:
+  // Per-point cache states (accessed through std::atomic_ref).
+  static constexpr std::uint8_t kEmpty = 0;
+  static constexpr std::uint8_t kBusy = 1;   // claimed by one thread, being written
+  static constexpr std::uint8_t kReady = 2;  // written; readable after an acquire load
+
+  void publish_axis(std::size_t i, const Eigen::Vector3f& a) const {
+    std::atomic_ref<std::uint8_t> state(axis_state_[i]);
+    std::uint8_t expected = kEmpty;
+    if (state.compare_exchange_strong(expected, kBusy, std::memory_order_acquire)) {
+      axes_[i] = a;
+      state.store(kReady, std::memory_order_release);
+    }
+  }
+
+  // Candidate list of map point m (list_len_ entries) and the distance to its
+  // last entry (inf: the list is the whole map): the cached list, or -- on
+  // first use -- computed into `own` (kMaxCandidateList long) and published.
+  const std::uint32_t* candidates_of(std::uint32_t m, std::uint32_t* own, float& radius_m) const {
+    std::atomic_ref<std::uint8_t> state(list_state_[m]);
+    const std::uint32_t* cached = lists_.data() + static_cast<std::size_t>(m) * list_len_;
+    if (state.load(std::memory_order_acquire) == kReady) {
+      radius_m = list_radius_m_[m];
+      return cached;
+    }
+    std::array<float, kMaxCandidateList> d2{};
+    const std::size_t found = tree_.knn(tree_.point(m), list_len_, own, d2.data());
+    radius_m = list_len_ == size() ? std::numeric_limits<float>::infinity() : std::sqrt(d2[list_len_ - 1]);
+    // The list's head is the point's shape neighbourhood: its axis comes free.
+    if (std::atomic_ref<std::uint8_t>(axis_state_[m]).load(std::memory_order_acquire) != kReady) {
+      publish_axis(m, detail::neighbourhood_axis(tree_, kind_, own,
+                                                 std::min(found, static_cast<std::size_t>(shape_neighbours_))));
+    }
+    std::uint8_t expected = kEmpty;
+    if (state.compare_exchange_strong(expected, kBusy, std::memory_order_acquire)) {
+      std::copy_n(own, list_len_, lists_.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(m) * list_len_));
+      list_radius_m_[m] = radius_m;
+      state.store(kReady, std::memory_order_release);
+    }
+    return own;
+  }
+
   FeatureKind kind_;
   int shape_neighbours_ = 10;
   KdTree3f tree_;
   std::vector<Class> labels_;
-  std::vector<Eigen::Vector3f> axes_;
   std::size_t list_len_ = 0;
-  std::vector<std::uint32_t> lists_;   // list_len_ nearest map points of each point
-  std::vector<float> list_radius_m_;   // distance to the last of them (inf: the whole map)
+  // Lazy caches (mutable: filled by const queries, see the file comment).
+  mutable std::vector<Eigen::Vector3f> axes_;
+  mutable std::vector<std::uint8_t> axis_state_;
+  mutable std::vector<std::uint32_t> lists_;   // list_len_ nearest map points of each point
+  mutable std::vector<float> list_radius_m_;   // distance to the last of them (inf: the whole map)
+  mutable std::vector<std::uint8_t> list_state_;
+  std::uint64_t generation_ = 0;  // unique id of the last build() (NearestCache validity); 0 = never built
 };
 
 }  // namespace semlio

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include <semlio/concepts.hpp>
 #include <semlio/core/error.hpp>
@@ -173,7 +174,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     preprocess(scan, config_.preprocess);
     report.points = scan.size();
     if (!scan.empty()) {
-      infer_rings(scan, config_.sensor, config_.rings);
+      infer_rings(scan, config_.sensor, config_.rings, ring_starts_);
       if (config_.kitti_vertical_correction) {
         for (auto& p : scan.points) p = correct_vertical_angle(p, kKittiVerticalCorrectionRad);
       }
@@ -285,6 +286,8 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
   [[nodiscard]] std::size_t keyframe_count() const noexcept { return map_.keyframe_count(); }
   /// The local map (keyframes and the maps of the last build).
   [[nodiscard]] const LocalMap& local_map() const noexcept { return map_; }
+  /// The scan-to-map problem (bound to the last frame's features and the local map).
+  [[nodiscard]] const ScanToMapProblem<A, RC, RS>& problem() const noexcept { return problem_; }
   /// Features of the last processed frame (lidar frame; corners and surfaces).
   [[nodiscard]] const LoamFeatures& features() const noexcept { return features_; }
   /// Latest pose of the lidar in the map frame.
@@ -331,6 +334,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
   LocalMap map_;
   ScanToMapProblem<A, RC, RS> problem_;
   LoamFeatures features_;
+  std::vector<std::size_t> ring_starts_;  // infer_rings workspace (no per-frame allocation)
   LabelHistogram histogram_{};
   LabelHistogram lastkf_histogram_{};
   RankHistogram rank_histogram_{};

@@ -71,10 +71,19 @@ class ScanToMapProblem {
     surface_assoc_.set_scan(surfaces.points);
   }
 
-  /// Re-associates every feature at pose T_map_scan.
+  /// Re-associates every feature at pose T_map_scan. Associators that offer
+  /// associate(T, out, NearestCache&) reuse each feature's candidate list
+  /// across calls (exact: the same matches, fewer k-d tree searches).
   void associate(const SE3d& T_map_scan) {
-    corner_assoc_.associate(T_map_scan, corner_matches_);
-    surface_assoc_.associate(T_map_scan, surface_matches_);
+    if constexpr (requires(const A& a, Correspondences& out, NearestCache& cache) {
+                    a.associate(T_map_scan, out, cache);
+                  }) {
+      corner_assoc_.associate(T_map_scan, corner_matches_, corner_cache_);
+      surface_assoc_.associate(T_map_scan, surface_matches_, surface_cache_);
+    } else {
+      corner_assoc_.associate(T_map_scan, corner_matches_);
+      surface_assoc_.associate(T_map_scan, surface_matches_);
+    }
   }
 
   /// Adds every valid residual at T_map_scan to eq (eq. 13, squared).
@@ -87,6 +96,12 @@ class ScanToMapProblem {
   [[nodiscard]] const Correspondences& corner_matches() const noexcept { return corner_matches_; }
   /// Correspondences of the last association, per surface feature.
   [[nodiscard]] const Correspondences& surface_matches() const noexcept { return surface_matches_; }
+
+  /// Candidate-list cache of the corner / surface association (diagnostics:
+  /// hits and refills since it was last sized).
+  [[nodiscard]] const NearestCache& corner_cache() const noexcept { return corner_cache_; }
+  /// See corner_cache().
+  [[nodiscard]] const NearestCache& surface_cache() const noexcept { return surface_cache_; }
 
   /// Features with at least one match in the last association (corner, surface).
   [[nodiscard]] std::pair<std::size_t, std::size_t> matched_counts() const noexcept {
@@ -123,6 +138,8 @@ class ScanToMapProblem {
   const FeatureCloud* surfaces_ = nullptr;
   Correspondences corner_matches_;
   Correspondences surface_matches_;
+  NearestCache corner_cache_;   // per-feature candidate lists across iterations (and frames)
+  NearestCache surface_cache_;
 };
 
 }  // namespace semlio

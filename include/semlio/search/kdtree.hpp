@@ -21,6 +21,7 @@
 #include <nanoflann.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -51,22 +52,39 @@ using KdIndex = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor
                                                     KdPoints, 3, std::uint32_t>;
 
 /// Smallest float strictly greater than d (keeps equal-distance candidates in
-/// play: nanoflann only offers points with distance < worstDist()).
-inline float next_up(float d) { return std::nextafter(d, std::numeric_limits<float>::infinity()); }
+/// play: nanoflann only offers points with distance < worstDist()). Inline bit
+/// step for the finite non-negative values squared distances take (equal to
+/// std::nextafter(d, +inf) there); std::nextafter otherwise.
+inline float next_up(float d) {
+  if (d >= 0.0F && d < std::numeric_limits<float>::max()) {
+    // +0 and -0 compare equal: +0's successor is the smallest denormal either way.
+    const std::uint32_t bits = d == 0.0F ? 0U : std::bit_cast<std::uint32_t>(d);
+    return std::bit_cast<float>(bits + 1U);
+  }
+  return std::nextafter(d, std::numeric_limits<float>::infinity());
+}
 
-/// k-nearest result set ordered by (squared distance, index); no allocation.
+/// k-nearest result set ordered by (squared distance, index), optionally
+/// limited to squared distances <= max_sq_dist; no allocation.
 class KnnTieResult {
  public:
   using DistanceType = float;
   using IndexType = std::uint32_t;
 
-  KnnTieResult(std::size_t capacity, std::uint32_t* idx, float* dist)
-      : idx_(idx), dist_(dist), capacity_(capacity) {}
+  KnnTieResult(std::size_t capacity, std::uint32_t* idx, float* dist,
+               float max_sq_dist = std::numeric_limits<float>::infinity())
+      : idx_(idx),
+        dist_(dist),
+        capacity_(capacity),
+        cap_(max_sq_dist),
+        worst_(max_sq_dist < std::numeric_limits<float>::max() ? next_up(max_sq_dist)
+                                                                : std::numeric_limits<float>::max()) {}
 
   [[nodiscard]] std::size_t size() const { return count_; }
   [[nodiscard]] bool full() const { return count_ == capacity_; }
 
   bool addPoint(float d, std::uint32_t index) {
+    if (d > cap_) return true;
     if (full() && !less(d, index, dist_[count_ - 1], idx_[count_ - 1])) return true;
     std::size_t i = (count_ < capacity_) ? count_ : capacity_ - 1;
     while (i > 0 && less(d, index, dist_[i - 1], idx_[i - 1])) {
@@ -77,12 +95,13 @@ class KnnTieResult {
     dist_[i] = d;
     idx_[i] = index;
     if (count_ < capacity_) ++count_;
+    if (full()) worst_ = next_up(dist_[count_ - 1]);  // <= next_up(cap_): accepted d <= cap_
     return true;
   }
 
-  [[nodiscard]] float worstDist() const {
-    return full() ? next_up(dist_[count_ - 1]) : std::numeric_limits<float>::max();
-  }
+  /// Bound nanoflann prunes with: just above the k-th distance once full, else
+  /// just above the cap (float max when unlimited).
+  [[nodiscard]] float worstDist() const { return worst_; }
 
  private:
   static bool less(float d, std::uint32_t i, float d2, std::uint32_t i2) {
@@ -93,6 +112,8 @@ class KnnTieResult {
   float* dist_;
   std::size_t capacity_;
   std::size_t count_ = 0;
+  float cap_;
+  float worst_;
 };
 
 /// Radius result set collecting the indices with squared distance <= r^2.
@@ -205,6 +226,17 @@ class KdTree3f {
                   float* sq_dist) const {
     if (k == 0 || empty()) return 0;
     detail::KnnTieResult result(k, idx, sq_dist);
+    impl_->index->findNeighbors(result, q.data(), nanoflann::SearchParams());
+    return result.size();
+  }
+
+  /// As knn(q, k, idx, sq_dist), keeping only points with squared distance
+  /// <= max_sq_dist [m^2]: exactly knn()'s result cut there, but the search
+  /// stops expanding beyond it (cheap for queries far from every point).
+  std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* idx, float* sq_dist,
+                  float max_sq_dist) const {
+    if (k == 0 || empty() || !(max_sq_dist >= 0.0F)) return 0;
+    detail::KnnTieResult result(k, idx, sq_dist, max_sq_dist);
     impl_->index->findNeighbors(result, q.data(), nanoflann::SearchParams());
     return result.size();
   }

@@ -1,0 +1,167 @@
+#pragma once
+/// \file
+/// SmallKdTree3f: a k-d tree for the per-frame scan side (a few thousand
+/// feature points, rebuilt every frame) that reuses its buffers, so that a
+/// rebuild allocates nothing once they have grown -- unlike KdTree3f, whose
+/// nanoflann index allocates its nodes anew on every build.
+///
+/// Results equal KdTree3f::knn bit for bit: the exact k nearest by (squared
+/// distance, index), distances summed as nanoflann's L2 metric does
+/// ((dx^2 + dy^2) + dz^2 in float). Pruning is exact too: a subtree is skipped
+/// only when its lower bound exceeds the current k-th distance. The bound
+/// keeps, per axis, the squared offset c_a = fl((q_a - s)^2) of q from the
+/// nearest splitting plane crossed on that axis (|q_a - p_a| >= |q_a - s| for
+/// every point beyond it) and sums them in the metric's order,
+/// fl(fl(c_x + c_y) + c_z): rounding is monotone, so the bound never exceeds
+/// the float distance of any point in the subtree.
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace semlio {
+
+/// Static 3D k-d tree over a copy of the points, rebuilt in place with no
+/// allocation once its buffers have grown. Const queries are thread-safe.
+class SmallKdTree3f {
+ public:
+  /// Copies pts and builds the tree, replacing any previous content. O(n log n).
+  void build(const std::vector<Eigen::Vector3f>& pts) {
+    points_.assign(pts.begin(), pts.end());
+    order_.resize(points_.size());
+    for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = static_cast<std::uint32_t>(i);
+    nodes_.clear();
+    if (points_.empty()) return;
+    // Split nodes hold > kLeaf points, so every leaf holds >= kLeaf / 2 (or all
+    // n): at most 2n / (kLeaf / 2) + 1 nodes. Reserved so the vector keeps its
+    // capacity from frame to frame.
+    nodes_.reserve(2 * (points_.size() / (kLeaf / 2) + 1) + 1);
+    build_node(0, static_cast<std::uint32_t>(points_.size()));
+  }
+
+  /// Number of points.
+  [[nodiscard]] std::size_t size() const noexcept { return points_.size(); }
+  /// True when empty.
+  [[nodiscard]] bool empty() const noexcept { return points_.empty(); }
+  /// The owned points, in the order given to build() (indices refer to it).
+  [[nodiscard]] const std::vector<Eigen::Vector3f>& points() const noexcept { return points_; }
+  /// Point i (precondition: i < size()).
+  [[nodiscard]] const Eigen::Vector3f& point(std::size_t i) const { return points_[i]; }
+
+  /// The k nearest points to q sorted by (squared distance, index) into idx /
+  /// sq_dist (each at least k long); returns min(k, size()). Equal to
+  /// KdTree3f::knn on the same points. Allocates nothing.
+  std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* idx, float* sq_dist) const {
+    if (k == 0 || empty()) return 0;
+    Result r{idx, sq_dist, k, 0};
+    std::array<float, 3> off{};
+    search(0, q, r, off);
+    return r.count;
+  }
+
+ private:
+  static constexpr std::uint32_t kLeaf = 8;
+
+  struct Node {
+    std::uint32_t begin;  // range in order_ (leaves) / unused (inner)
+    std::uint32_t end;
+    std::uint32_t left;   // child node indices (inner); 0 = leaf
+    std::uint32_t right;
+    float split;          // splitting value along axis
+    std::uint8_t axis;
+  };
+
+  struct Result {
+    std::uint32_t* idx;
+    float* d2;
+    std::size_t k;
+    std::size_t count;
+    [[nodiscard]] bool full() const { return count == k; }
+    // Admits (d, i) when it beats the current k-th by (distance, index).
+    void add(float d, std::uint32_t i) {
+      const auto less = [](float a, std::uint32_t ia, float b, std::uint32_t ib) {
+        return a < b || (a == b && ia < ib);
+      };
+      if (full() && !less(d, i, d2[k - 1], idx[k - 1])) return;
+      std::size_t j = full() ? k - 1 : count;
+      while (j > 0 && less(d, i, d2[j - 1], idx[j - 1])) {
+        d2[j] = d2[j - 1];
+        idx[j] = idx[j - 1];
+        --j;
+      }
+      d2[j] = d;
+      idx[j] = i;
+      if (!full()) ++count;
+    }
+  };
+
+  static float sq_dist(const Eigen::Vector3f& q, const Eigen::Vector3f& p) {
+    float s = 0.0F;
+    for (int a = 0; a < 3; ++a) {
+      const float d = q[a] - p[a];
+      s += d * d;
+    }
+    return s;
+  }
+
+  std::uint32_t build_node(std::uint32_t begin, std::uint32_t end) {
+    const auto self = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.push_back(Node{begin, end, 0, 0, 0.0F, 0});
+    if (end - begin <= kLeaf) return self;
+    // Split the widest extent at the median point.
+    Eigen::Vector3f lo = points_[order_[begin]];
+    Eigen::Vector3f hi = lo;
+    for (std::uint32_t i = begin + 1; i < end; ++i) {
+      lo = lo.cwiseMin(points_[order_[i]]);
+      hi = hi.cwiseMax(points_[order_[i]]);
+    }
+    Eigen::Index axis = 0;
+    (hi - lo).maxCoeff(&axis);
+    const std::uint32_t mid = begin + (end - begin) / 2;
+    const auto a = static_cast<Eigen::Index>(axis);
+    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
+                     [&](std::uint32_t x, std::uint32_t y) { return points_[x][a] < points_[y][a]; });
+    // Left: order_[begin, mid) with coordinate <= split; right: [mid, end) with >= split.
+    const float split = points_[order_[mid]][a];
+    const std::uint32_t left = build_node(begin, mid);
+    const std::uint32_t right = build_node(mid, end);
+    Node& n = nodes_[self];
+    n.left = left;
+    n.right = right;
+    n.split = split;
+    n.axis = static_cast<std::uint8_t>(axis);
+    return self;
+  }
+
+  // off: per-axis squared offsets of the subtree's region from q (see the file comment).
+  void search(std::uint32_t node, const Eigen::Vector3f& q, Result& r, std::array<float, 3>& off) const {
+    const Node& n = nodes_[node];
+    if (n.left == 0) {
+      for (std::uint32_t i = n.begin; i < n.end; ++i) r.add(sq_dist(q, points_[order_[i]]), order_[i]);
+      return;
+    }
+    const float diff = q[n.axis] - n.split;
+    const std::uint32_t near = diff <= 0.0F ? n.left : n.right;
+    const std::uint32_t far = diff <= 0.0F ? n.right : n.left;
+    search(near, q, r, off);
+    // Every far-side point p has |q_a - p_a| >= |diff| (the split lies between them).
+    const float saved = off[n.axis];
+    const float cut = diff * diff;
+    off[n.axis] = std::max(saved, cut);
+    const float bound = (off[0] + off[1]) + off[2];
+    // Skip only when the bound strictly exceeds the k-th distance (ties may still enter by index).
+    if (!r.full() || bound <= r.d2[r.k - 1]) search(far, q, r, off);
+    off[n.axis] = saved;
+  }
+
+  std::vector<Eigen::Vector3f> points_;
+  std::vector<std::uint32_t> order_;
+  std::vector<Node> nodes_;
+};
+
+}  // namespace semlio
