@@ -10,6 +10,7 @@
 #include <semlio/residual/semantic_weighted.hpp>
 #include <semlio/search/kdtree.hpp>
 #include <semlio/search/voxel_grid.hpp>
+#include <semlio/sim/simulator.hpp>
 
 #include <semlio_test/data.hpp>
 
@@ -152,6 +153,8 @@ TEST_CASE("Registration of the real 32-beam scan pair from identity", "[pipeline
     CHECK(angle_deg(r.T_target_source, T_ref) < 0.25);
     CHECK(r.inliers() > 1000);
     CHECK(r.fitness() > 0.5);
+    // A well-structured outdoor scene: no direction is degenerate.
+    CHECK_FALSE(r.solve.degenerate());
   }
 }
 
@@ -195,8 +198,10 @@ TEST_CASE("Registration of two consecutive real KITTI scans agrees with an indep
     INFO("semlio " << r.T_target_source.translation().transpose() << " icp " << T_icp.translation().transpose());
     CHECK(distance_m(r.T_target_source, T_icp) < 0.05);
     CHECK(angle_deg(r.T_target_source, T_icp) < 0.1);
+    // An urban street: no direction is degenerate (gauss_newton.hpp's ratio).
+    CHECK_FALSE(r.solve.degenerate());
   }
-  SECTION("corners + surfaces with the ring-crossing check agree with the ICP within 1.5 cm and 0.1 deg") {
+  SECTION("corners + surfaces with the ring-crossing check agree with the ICP within 1 cm and 0.1 deg") {
     const PointToLine line({.min_cone_angle_rad = 20.0 * kDeg});
     const LoamResiduals<SemanticWeighted<PointToLine>, SemanticWeighted<PointToPlane>> checked{
         SemanticWeighted<PointToLine>(line), SemanticWeighted<PointToPlane>{}};
@@ -209,7 +214,8 @@ TEST_CASE("Registration of two consecutive real KITTI scans agrees with an indep
       INFO((normal ? "NormalConsistency" : "NearestK") << ": semlio " << r.T_target_source.translation().transpose()
                                                        << " icp " << T_icp.translation().transpose());
       CHECK(r.corner_matches > 500);
-      CHECK(distance_m(r.T_target_source, T_icp) < 0.015);
+      CHECK(distance_m(r.T_target_source, T_icp) < 0.01);
+      CHECK_FALSE(r.solve.degenerate());
       CHECK(angle_deg(r.T_target_source, T_icp) < 0.1);
     }
   }
@@ -248,5 +254,104 @@ TEST_CASE("Degenerate registration inputs give a status and finite numbers", "[p
     const auto r = register_scan(one, target, SE3d(), NormalConsistency{}, kWeighted);
     check_finite<NormalConsistency, int>(r);
     CHECK_FALSE(r.solve.status == SolveStatus::kConverged);
+  }
+}
+
+namespace {
+
+// Registers simulated frame `first + 1` against frame `first` of a drive,
+// starting from the ground truth (what a good prediction gives), with the
+// baseline (nearest 5, plain) or the paper's (normal consistency, semantic
+// weights) front end. Returns the result and the true motion direction.
+RegistrationResult register_sim_pair(sim::WorldKind world, bool distortion, std::size_t first, bool normal,
+                                     Eigen::Vector3d& motion_dir) {
+  sim::SimulatorConfig c;
+  c.world = world;
+  c.traffic = sim::TrafficLevel::kNone;
+  c.frames = first + 2;
+  c.seed = 1;
+  c.distortion = distortion;
+  const sim::Simulator simulator(c);
+  sim::Frame a = simulator.frame(first);
+  sim::Frame b = simulator.frame(first + 1);
+  const SE3d T_true = a.T_world_lidar.inverse() * b.T_world_lidar;
+  motion_dir = T_true.translation().normalized();
+  return normal ? register_scan(b.scan, a.scan, T_true, NormalConsistency{}, kWeighted)
+                : register_scan(b.scan, a.scan, T_true, NearestK{}, kPlain);
+}
+
+}  // namespace
+
+TEST_CASE("Degeneracy is reported along the road on a simulated highway, not in a street",
+          "[pipeline][registration]") {
+  // Issue 7: on a straight highway (guard rails, flat ground, posts and
+  // lights only every few tens of metres) the along-road direction is weakly
+  // constrained; the front end must say so, in that direction. A street
+  // (buildings, cross streets) must not be reported degenerate.
+  for (const bool normal : {false, true}) {
+    INFO((normal ? "NormalConsistency" : "NearestK"));
+    Eigen::Vector3d along;
+    const RegistrationResult highway = register_sim_pair(sim::WorldKind::kHighway, true, 6, normal, along);
+    INFO("highway eigenvalues " << highway.solve.eigenvalues.transpose() << " v0 "
+                                << highway.solve.eigenvectors.col(0).transpose());
+    REQUIRE(highway.solve.ok());
+    CHECK(highway.solve.eigenvalues.allFinite());
+    CHECK(highway.solve.degenerate_directions >= 1);
+    // The first reported direction is the degenerate one: mostly a
+    // translation, and along the direction of travel.
+    const Eigen::Matrix<double, 6, 1> v = highway.solve.eigenvectors.col(0);
+    REQUIRE(v.head<3>().norm() > 0.9);
+    CHECK(std::abs(v.head<3>().normalized().dot(along)) > 0.9);
+
+    const RegistrationResult street = register_sim_pair(sim::WorldKind::kUrban, false, 10, normal, along);
+    INFO("street eigenvalues " << street.solve.eigenvalues.transpose());
+    REQUIRE(street.solve.ok());
+    CHECK_FALSE(street.solve.degenerate());
+  }
+}
+
+TEST_CASE("Simulated street frame pairs from identity with the ring-crossing check",
+          "[pipeline][registration]") {
+  // Without the in-cone corner lines nothing pulls towards zero motion, but
+  // from the identity start (1.1 m short at 11 m/s) the first association
+  // can leave the forward direction unconstrained. The solver re-analyses
+  // degeneracy after every re-association (gauss_newton.hpp), so that first
+  // impression must not freeze it. NearestK must land near the truth on
+  // every pair. NormalConsistency keeps fewer corner matches: on 2 of these 3
+  // pairs the forward eigenvalue at the identity start is below the absolute
+  // threshold and the association is a fixed point (x frozen -> same
+  // matches -> x still weak), so it stays at the start -- known, reported in
+  // the README; it must then at least say so (degenerate status), never be
+  // silently wrong.
+  sim::SimulatorConfig c;
+  c.world = sim::WorldKind::kUrban;
+  c.traffic = sim::TrafficLevel::kNone;
+  c.frames = 80;
+  c.seed = 1;
+  const sim::Simulator simulator(c);
+  const PointToLine line({.min_cone_angle_rad = 20.0 * kDeg});
+  const LoamResiduals<SemanticWeighted<PointToLine>, SemanticWeighted<PointToPlane>> checked{
+      SemanticWeighted<PointToLine>(line), SemanticWeighted<PointToPlane>{}};
+  for (const std::size_t first : {20U, 45U, 70U}) {
+    const sim::Frame a0 = simulator.frame(first);
+    const sim::Frame b0 = simulator.frame(first + 1);
+    const SE3d T_true = a0.T_world_lidar.inverse() * b0.T_world_lidar;
+    for (const bool normal : {true, false}) {
+      Scan a = a0.scan;
+      Scan b = b0.scan;
+      const RegistrationResult r = normal ? register_scan(b, a, SE3d(), NormalConsistency{}, checked)
+                                          : register_scan(b, a, SE3d(), NearestK{}, checked);
+      INFO("frame " << first << (normal ? " NormalConsistency" : " NearestK") << ": "
+                    << distance_m(r.T_target_source, T_true) << " m, " << angle_deg(r.T_target_source, T_true)
+                    << " deg, true motion " << T_true.translation().norm() << " m, first analysis degenerate "
+                    << r.solve.initial_degenerate_directions);
+      REQUIRE(r.solve.ok());
+      const bool landed = distance_m(r.T_target_source, T_true) < 0.03 && angle_deg(r.T_target_source, T_true) < 0.1;
+      if (normal) {
+        CHECK((landed || r.solve.degenerate()));
+      } else {
+        CHECK(landed);
+      }
+    }
   }
 }
