@@ -241,7 +241,7 @@ TEST_CASE("Gauss-Newton re-analyses degeneracy after re-association", "[solve]")
   }
   SECTION("re-analysis follows the problem: x converges once the cross wall is matched") {
     SE3d T;
-    const auto report = semlio::gauss_newton(problem, T, {.degeneracy_ratio = 0.0});
+    const auto report = semlio::gauss_newton(problem, T, {.degeneracy_ratio = 0.0, .reanalyse_degeneracy = true});
     INFO("analyses " << report.analyses << " residuals " << report.num_residuals << " T " << T.log().transpose()
                      << " eigenvalues " << report.eigenvalues.transpose() << " v0 " << report.eigenvectors.col(0).transpose());
     CHECK(report.ok());

@@ -30,7 +30,9 @@ struct RegistrationConfig {
   PreprocessConfig preprocess{};                ///< range crop and ego box
   LoamFeatureConfig features{};                 ///< eq. 2 features
   LocalMapConfig map{};                         ///< target map leaf sizes and normal fits
-  GaussNewtonConfig solver{};                   ///< Gauss-Newton settings
+  /// Gauss-Newton settings; degeneracy re-analysed after each re-association
+  /// because a registration may start far off (identity), see gauss_newton.hpp.
+  GaussNewtonConfig solver{.reanalyse_degeneracy = true};
 };
 
 /// Outcome of a registration.

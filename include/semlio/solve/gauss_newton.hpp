@@ -15,11 +15,16 @@
 /// the first association is not representative: a direction can look
 /// unconstrained only because the features that fix it are still outside the
 /// association gate, and freezing it then keeps it at the start for the whole
-/// solve. By default (`reanalyse_degeneracy`) the analysis is therefore
-/// repeated on the first system after every re-association, i.e. whenever
-/// the residual set changes; with `reanalyse_degeneracy = false` the LOAM /
-/// LIO-SAM behaviour is kept (first iteration only). A problem that never
-/// re-associates is analysed once either way.
+/// solve. With `reanalyse_degeneracy` the analysis is therefore repeated on
+/// the first system after every re-association, i.e. whenever the residual
+/// set changes; register_scan() (RegistrationConfig) turns it on. The default
+/// stays LOAM / LIO-SAM's (first iteration only) for starts near the answer
+/// -- odometry's prediction, a loop candidate's guess -- because there the
+/// freeze is a safeguard: re-analysed, a loop verification on the `aliased`
+/// world slid along its weak direction into the look-alike block and
+/// accepted 5 false loops, and the lidar-inertial front end on a short
+/// simulated drive slipped along the road (tests/loop, tests/imu). A problem
+/// that never re-associates is analysed once either way.
 ///
 /// What counts as degenerate. An eigenvalue l_k of H is degenerate when it is
 /// below `degeneracy_threshold` (LIO-SAM's absolute test, 100) or below
@@ -78,7 +83,7 @@ struct GaussNewtonConfig {
   double degeneracy_threshold = 100.0;     ///< eigenvalues of H below this are degenerate directions (LIO-SAM)
   double degeneracy_ratio = 0.25;          ///< also degenerate: eigenvalue below this x mean diagonal of its part of H (0 = off); see file comment
   bool remap_degenerate = true;            ///< project steps away from degenerate directions
-  bool reanalyse_degeneracy = true;        ///< repeat the analysis after every re-association (false: first iteration only, as LIO-SAM)
+  bool reanalyse_degeneracy = false;       ///< repeat the analysis after every re-association (default: first iteration only, as LIO-SAM; registration from far off turns it on)
   bool reset_weak_directions = false;      ///< put directions weak only by degeneracy_ratio back at the start (see gauss_newton())
   std::size_t min_residuals = 10;          ///< fewer residuals: status kTooFewResiduals, pose unchanged
 };
