@@ -311,3 +311,157 @@ TEST_CASE("Slam on the real KITTI scans, and config validation", "[pipeline]") {
   CHECK_THROWS_AS(SlamConfig{.loop_interval_s = -1.0}.validate(), ConfigError);
   CHECK_NOTHROW(SlamConfig{}.validate());
 }
+
+namespace {
+
+// A front end that drives laps of a circle (radius 10 m, 1 m per frame, every
+// frame a keyframe) and sees the same small synthetic scene every time: the
+// long drive of the bounded-store test without any registration cost.
+class CircleFrontEnd {
+ public:
+  FrameReport process(Scan& scan, const std::optional<SE3d>& /*prior*/) {
+    constexpr double kRadius = 10.0;
+    const double a = static_cast<double>(frame_) / kRadius;  // 1 m of arc per frame
+    FrameReport r;
+    r.frame = frame_;
+    r.stamp_s = 0.1 * static_cast<double>(frame_);
+    r.T_map_lidar = SE3d(SO3d::exp(Eigen::Vector3d(0.0, 0.0, a + 1.5707963267948966)),
+                         Eigen::Vector3d(kRadius * std::cos(a), kRadius * std::sin(a), 0.0));
+    r.status = OdometryStatus::kTracked;
+    r.keyframe = true;
+    ++frame_;
+    scan.points.clear();
+    scan.labels.clear();
+    for (int i = 0; i < 2000; ++i) {  // distinct 0.5 m voxels: 2000 points kept
+      scan.points.emplace_back(static_cast<float>(i % 40) * 0.5F - 10.0F, static_cast<float>(i / 40) * 0.5F - 12.0F,
+                               -1.5F);
+      scan.labels.push_back(Class::kRoad);
+    }
+    features_.corners.points.assign(300, Eigen::Vector3f(5.0F, 0.0F, 0.0F));
+    features_.corners.labels.assign(300, Class::kPole);
+    features_.surfaces.points.assign(700, Eigen::Vector3f(0.0F, 0.0F, -1.5F));
+    features_.surfaces.labels.assign(700, Class::kRoad);
+    return r;
+  }
+  [[nodiscard]] const LoamFeatures& features() const { return features_; }
+
+ private:
+  std::size_t frame_ = 0;
+  LoamFeatures features_;
+};
+static_assert(SlamFrontEnd<CircleFrontEnd>);
+
+}  // namespace
+
+TEST_CASE("Slam's bounded keyframe store: the cap holds on a long drive", "[pipeline]") {
+  constexpr std::size_t kCap = 20;
+  constexpr std::size_t kLap = 63;  // frames per lap (2 pi 10 m at 1 m per frame)
+  // No loop candidates (time gap beyond the drive): only the store is tested.
+  const SlamConfig config{.loop_closure = true, .loop_interval_s = 0.0, .max_keyframe_clouds = kCap,
+                          .place_spacing_m = 2.0};
+  Slam slam(CircleFrontEnd{}, RadiusLoopDetector({.min_time_gap_s = 1e6}), config);
+  std::vector<std::size_t> bytes;
+  const std::size_t window = config.graph.window_size;
+  for (std::size_t i = 0; i < 6 * kLap; ++i) {
+    Scan scan;
+    const SlamFrameReport r = slam.process(scan);
+    // Issue 6's incremental contract: without a loop a keyframe costs a
+    // window update (window_size free nodes and their factors), however long
+    // the graph has grown.
+    REQUIRE(r.graph.has_value());
+    if (i >= window) {
+      CHECK(r.graph->mode == GraphSolveMode::window);
+      CHECK(r.graph->free_nodes == window);
+      CHECK(r.graph->active_factors <= window + 1);
+    }
+    // Data bytes: the store less the fixed-size keyframe records (~0.3 kB
+    // each, the same order as a graph node, which grow with the drive).
+    bytes.push_back(slam.keyframe_bytes() - slam.keyframes().capacity() * sizeof(LoopKeyframe));
+    // The newest kCap keyframes are never retired; all older ones are.
+    REQUIRE(slam.keyframes().size() - slam.retired_count() == std::min(kCap, slam.keyframes().size()));
+  }
+  // Places: about one per 2 m of the circle, none within 2 m of another;
+  // archived keyframes hold no data; places and recent ones do.
+  const std::size_t places = slam.places().size();
+  INFO("places " << places << " archived " << slam.archived_count() << " bytes " << bytes.back());
+  CHECK(places >= kLap / 3);
+  CHECK(places <= kLap / 2 + 1);
+  CHECK(places + slam.archived_count() == slam.retired_count());
+  for (std::size_t a = 0; a < places; ++a) {
+    for (std::size_t b = a + 1; b < places; ++b) {
+      const auto& pa = slam.keyframes()[slam.places()[a]].T_world_lidar.translation();
+      const auto& pb = slam.keyframes()[slam.places()[b]].T_world_lidar.translation();
+      CHECK((pa - pb).norm() >= 2.0 - 1e-9);
+    }
+  }
+  for (std::size_t k = 0; k < slam.keyframes().size(); ++k) {
+    const LoopKeyframe& kf = slam.keyframes()[k];
+    if (kf.archived) {
+      CHECK(kf.cloud.capacity() == 0);
+      CHECK(kf.surfaces.points.capacity() == 0);
+    } else {
+      CHECK(kf.cloud.size() == 2000);
+      CHECK(kf.corners.size() == 300);
+    }
+  }
+  // The store stops growing once the first lap has retired: from the third
+  // lap on its size is constant while the graph keeps growing.
+  CHECK(bytes[3 * kLap] == bytes.back());
+  CHECK(bytes[3 * kLap] == bytes[4 * kLap + 17]);
+  CHECK(bytes.back() <= bytes[kCap - 1] * (places + kCap + 1) / kCap);
+  CHECK(slam.graph().num_nodes() == 6 * kLap);
+  // The semantic map comes from the kept keyframes.
+  CHECK(slam.semantic_map().size() > 0);
+  // Without a cap every keyframe keeps its data (the unbounded store).
+  Slam unbounded(CircleFrontEnd{}, RadiusLoopDetector({.min_time_gap_s = 1e6}),
+                 SlamConfig{.loop_interval_s = 0.0, .max_keyframe_clouds = 0});
+  for (std::size_t i = 0; i < 2 * kLap; ++i) {
+    Scan scan;
+    unbounded.process(scan);
+  }
+  CHECK(unbounded.retired_count() == 0);
+  CHECK(unbounded.keyframe_bytes() > bytes[2 * kLap - 1]);
+}
+
+TEST_CASE("Slam's bounded store: loops still close, and no cap reached equals no cap", "[pipeline]") {
+  const Drive& d = drive();
+  const SlamConfig unbounded{.loop_closure = true, .loop_interval_s = 0.0, .max_keyframe_clouds = 0};
+  const auto off = replay(ReplayFrontEnd(0.003, 0.0), radius_detector(), SlamConfig{.loop_closure = false});
+  const auto full = replay(ReplayFrontEnd(0.003, 0.0), radius_detector(), unbounded);
+  SECTION("a cap the drive never reaches changes nothing") {
+    SlamConfig large = unbounded;
+    large.max_keyframe_clouds = full.keyframes().size() + 1;
+    const auto capped = replay(ReplayFrontEnd(0.003, 0.0), radius_detector(), large);
+    CHECK(capped.retired_count() == 0);
+    CHECK(capped.keyframe_bytes() == full.keyframe_bytes());
+    REQUIRE(capped.loops().size() == full.loops().size());
+    const auto a = capped.trajectory();
+    const auto b = full.trajectory();
+    for (std::size_t i = 0; i < a.size(); ++i) CHECK((a[i].matrix() - b[i].matrix()).norm() == 0.0);
+  }
+  SECTION("a cap of 10 keyframes: old places keep loops working") {
+    SlamConfig small = unbounded;
+    small.max_keyframe_clouds = 10;
+    const auto capped = replay(ReplayFrontEnd(0.003, 0.0), radius_detector(), small);
+    INFO("keyframes " << capped.keyframes().size() << " places " << capped.places().size() << " archived "
+                      << capped.archived_count() << " loops " << capped.loops().size() << " (unbounded "
+                      << full.loops().size() << "), bytes " << capped.keyframe_bytes() << " vs "
+                      << full.keyframe_bytes());
+    REQUIRE(capped.keyframes().size() >= 40);
+    CHECK(capped.keyframes().size() - capped.retired_count() == 10);
+    CHECK(capped.archived_count() > 0);
+    CHECK(capped.keyframe_bytes() < full.keyframe_bytes());
+    REQUIRE(capped.loops().size() >= 1);
+    // The loops link the new keyframes to retired ones (the candidate had
+    // left the recent window when it was verified).
+    std::size_t to_retired = 0;
+    for (const SlamLoop& l : capped.loops()) to_retired += l.from_keyframe + 10 < l.to_keyframe ? 1U : 0U;
+    CHECK(to_retired >= 1);
+    const double end_off = endpoint_error(off.trajectory(), d.gt);
+    const double end_on = endpoint_error(capped.trajectory(), d.gt);
+    INFO("endpoint " << end_off << " -> " << end_on << " m (unbounded " << endpoint_error(full.trajectory(), d.gt)
+                     << " m)");
+    CHECK(end_on < 0.5 * end_off);
+    CHECK(eval::ate(d.gt, capped.trajectory()).rmse_m < eval::ate(d.gt, off.trajectory()).rmse_m);
+  }
+}

@@ -25,6 +25,11 @@ struct LoopKeyframe {
   FeatureSet surfaces;                   ///< surface features, lidar frame
   std::vector<Eigen::Vector3f> cloud;    ///< the preprocessed scan, voxel-downsampled, lidar frame (Scan Context input)
   std::vector<Class> labels;             ///< labels of `cloud` (empty = unlabeled)
+  /// True when a bounded store (Slam's, pipeline/slam.hpp) dropped this
+  /// keyframe's features and cloud because a kept keyframe shows the same
+  /// place; stamp, pose (and the detectors' cached descriptors) remain.
+  /// Verification then builds its submap from the kept keyframes around it.
+  bool archived = false;
 };
 
 /// A verified loop closure: a relative-pose measurement between two keyframes.

@@ -36,7 +36,8 @@
 ///
 /// Layering: loop/ sits below pipeline/, so the two-map least-squares problem
 /// (the same as pipeline/scan_to_map.hpp's ScanToMapProblem with NearestK)
-/// is restated here in a few lines instead of including pipeline/.
+/// is assembled here from the shared lower-layer pieces (FeatureMap search,
+/// map/feature_terms.hpp's residual sum) instead of including pipeline/.
 
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
@@ -47,6 +48,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <semlio/associate/scan_shapes.hpp>
@@ -55,6 +57,7 @@
 #include <semlio/lie/se3.hpp>
 #include <semlio/loop/loop_keyframe.hpp>
 #include <semlio/map/feature_map.hpp>
+#include <semlio/map/feature_terms.hpp>
 #include <semlio/map/local_map.hpp>
 #include <semlio/residual/point_to_line.hpp>
 #include <semlio/residual/point_to_plane.hpp>
@@ -166,8 +169,8 @@ class LoopProblem {
 
   /// Adds every valid residual at T_map_scan (eq. 13, squared).
   void linearize(const SE3d& T_map_scan, NormalEquations& eq) const {
-    add_terms(*corners_, corner_matches_, *corner_map_, line_, T_map_scan, eq);
-    add_terms(*surfaces_, surface_matches_, *surface_map_, plane_, T_map_scan, eq);
+    accumulate_feature_terms(*corners_, corner_matches_, *corner_map_, line_, T_map_scan, eq);
+    accumulate_feature_terms(*surfaces_, surface_matches_, *surface_map_, plane_, T_map_scan, eq);
   }
 
  private:
@@ -185,19 +188,6 @@ class LoopProblem {
       FeatureMatches& m = out[i];
       for (std::size_t j = 0; j < n; ++j) detail::push_match(m, idx[j], j + 1);
       detail::enforce_min(map.kind(), m);
-    }
-  }
-
-  template <typename R>
-  static void add_terms(const FeatureSet& features, const Correspondences& matches, const FeatureMap& map,
-                        const R& residual, const SE3d& T_map_scan, NormalEquations& eq) {
-    const std::size_t n = std::min(features.size(), matches.size());
-    for (std::size_t i = 0; i < n; ++i) {
-      if (matches[i].count == 0) continue;
-      FeaturePoint f;
-      f.p_scan = features.points[i].template cast<double>();
-      const auto term = residual.evaluate(f, map.gather(matches[i]), T_map_scan);
-      if (term.valid) eq.add<R::kDim>(term.r, term.J_r_xi, term.weight);
     }
   }
 
@@ -236,6 +226,49 @@ inline Eigen::Matrix<double, 6, 6> clamp_information(const Eigen::Matrix<double,
   Matrix6 out = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
   if (!out.allFinite()) out = Matrix6::Identity() * lo;
   return 0.5 * (out + out.transpose());
+}
+
+/// The submap keyframes of a verification, in index order: the match and its
+/// +- submap_neighbours keyframes (LIO-SAM), each older than the query by
+/// submap_min_age_s and within submap_radius_m of the match. When that window
+/// holds archived keyframes (a bounded store dropped their data, see
+/// LoopKeyframe::archived), the place is rebuilt from what is kept: the
+/// nearest non-archived keyframes within submap_radius_m of the match (same
+/// age rule) fill the submap up to 2 * submap_neighbours + 1 keyframes. With
+/// no archived keyframe the result is exactly the window (the unbounded
+/// behaviour). Linear in the keyframes only when the window has gaps.
+inline void select_submap(const std::vector<LoopKeyframe>& keyframes, std::size_t match, std::size_t query,
+                          const LoopVerifierConfig& config, std::vector<std::size_t>& out) {
+  out.clear();
+  const LoopKeyframe& q = keyframes[query];
+  const Eigen::Vector3d& p_m = keyframes[match].T_world_lidar.translation();
+  const double r2 = config.submap_radius_m * config.submap_radius_m;
+  const auto eligible = [&](std::size_t j) {
+    if (j == query || keyframes[j].archived) return false;
+    if (j == match) return true;
+    return q.stamp_s - keyframes[j].stamp_s >= config.submap_min_age_s &&
+           (keyframes[j].T_world_lidar.translation() - p_m).squaredNorm() <= r2;
+  };
+  const auto N = static_cast<std::size_t>(std::max(0, config.submap_neighbours));
+  const std::size_t lo = match >= N ? match - N : 0;
+  const std::size_t hi = std::min(keyframes.size() - 1, match + N);
+  bool gaps = false;
+  for (std::size_t j = lo; j <= hi; ++j) {
+    if (keyframes[j].archived) gaps = true;
+    if (eligible(j)) out.push_back(j);
+  }
+  if (!gaps) return;
+  const std::size_t budget = 2 * N + 1;
+  std::vector<std::pair<double, std::size_t>> near;
+  for (std::size_t j = 0; j < keyframes.size(); ++j) {
+    if ((j >= lo && j <= hi) || !eligible(j)) continue;
+    near.emplace_back((keyframes[j].T_world_lidar.translation() - p_m).squaredNorm(), j);
+  }
+  const std::size_t room = budget > out.size() ? budget - out.size() : 0;
+  const std::size_t keep = std::min(room, near.size());
+  std::partial_sort(near.begin(), near.begin() + static_cast<std::ptrdiff_t>(keep), near.end());
+  for (std::size_t k = 0; k < keep; ++k) out.push_back(near[k].second);
+  std::sort(out.begin(), out.end());
 }
 
 }  // namespace detail
@@ -281,16 +314,9 @@ inline LoopVerification verify_loop(const std::vector<LoopKeyframe>& keyframes, 
   LocalMapConfig map_config = config.map;
   map_config.radius_m = 1e9;  // the keyframes are chosen above
   LocalMap submap(map_config);
-  const auto N = static_cast<std::size_t>(std::max(0, config.submap_neighbours));
-  const std::size_t lo = match >= N ? match - N : 0;
-  const std::size_t hi = std::min(keyframes.size() - 1, match + N);
-  for (std::size_t j = lo; j <= hi; ++j) {
-    if (j == query) continue;
-    if (j != match && !(q.stamp_s - keyframes[j].stamp_s >= config.submap_min_age_s)) continue;
-    if (j != match && !((keyframes[j].T_world_lidar.translation() - m.T_world_lidar.translation()).norm() <=
-                        config.submap_radius_m)) {
-      continue;
-    }
+  std::vector<std::size_t> chosen;
+  detail::select_submap(keyframes, match, query, config, chosen);
+  for (const std::size_t j : chosen) {
     submap.add_keyframe(keyframes[j].T_world_lidar, keyframes[j].corners, keyframes[j].surfaces);
   }
   out.submap_keyframes = submap.keyframe_count();

@@ -15,6 +15,7 @@
 #include <semlio/concepts.hpp>
 #include <semlio/features/loam_features.hpp>
 #include <semlio/map/feature_map.hpp>
+#include <semlio/map/feature_terms.hpp>
 #include <semlio/solve/gauss_newton.hpp>
 #include <semlio/solve/normal_equations.hpp>
 
@@ -88,8 +89,8 @@ class ScanToMapProblem {
 
   /// Adds every valid residual at T_map_scan to eq (eq. 13, squared).
   void linearize(const SE3d& T_map_scan, NormalEquations& eq) const {
-    add_terms(*corners_, corner_matches_, *corner_map_, residuals_.corner, T_map_scan, eq);
-    add_terms(*surfaces_, surface_matches_, *surface_map_, residuals_.surface, T_map_scan, eq);
+    accumulate_feature_terms(*corners_, corner_matches_, *corner_map_, residuals_.corner, T_map_scan, eq);
+    accumulate_feature_terms(*surfaces_, surface_matches_, *surface_map_, residuals_.surface, T_map_scan, eq);
   }
 
   /// Correspondences of the last association, per corner feature.
@@ -109,20 +110,6 @@ class ScanToMapProblem {
   }
 
  private:
-  template <typename R>
-  static void add_terms(const FeatureCloud& features, const Correspondences& matches, const FeatureMap& map,
-                        const R& residual, const SE3d& T_map_scan, NormalEquations& eq) {
-    const std::size_t n = std::min(features.size(), matches.size());
-    for (std::size_t i = 0; i < n; ++i) {
-      if (matches[i].count == 0) continue;
-      FeaturePoint f;
-      f.p_scan = features.points[i].template cast<double>();
-      f.label = features.labels.size() == features.points.size() ? features.labels[i] : Class::kUnlabeled;
-      const auto term = residual.evaluate(f, map.gather(matches[i]), T_map_scan);
-      if (term.valid) eq.add<R::kDim>(term.r, term.J_r_xi, term.weight);
-    }
-  }
-
   static std::size_t count_matched(const Correspondences& c) noexcept {
     std::size_t n = 0;
     for (const auto& m : c) n += m.count > 0 ? 1U : 0U;

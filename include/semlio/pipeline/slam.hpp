@@ -36,20 +36,41 @@
 /// motion partly came from the constant-velocity prediction, and the factor
 /// gets the weak default diag(1/sigma_t^2, 1/sigma_r^2) (1 m, 0.1 rad).
 ///
-/// Memory (bounded per keyframe). Per keyframe the back end keeps a
+/// Memory (bounded by the explored area). Per keyframe the back end keeps a
 /// LoopKeyframe: the LOAM features (corners and voxelised surfaces, 13 bytes
 /// each: position + label; the per-point scan indices are dropped) when loops
 /// are on, and the preprocessed scan voxel-downsampled at
-/// keyframe_cloud_leaf_m (0.5 m default; 13 bytes per point), plus a graph
-/// node and two factors (~1 kB). Measured on real KITTI 00 frame 0: ~11k
-/// cloud points + ~8k features = 0.25 MB per keyframe (keyframe_bytes()
-/// reports it; semlio_kitti writes it to report.json). Per frame only an index
-/// and a relative pose (~70 bytes) are kept. Nothing else grows with the drive
-/// (the front end's own local map is its business).
+/// keyframe_cloud_leaf_m (0.5 m default; 13 bytes per point): ~0.2-0.25 MB
+/// per keyframe (keyframe_bytes() reports the whole store; semlio_kitti
+/// writes it to report.json). Kept like that for every keyframe this would
+/// grow linearly with the drive, so the store is bounded as follows:
+/// - the newest max_keyframe_clouds keyframes (default 100, ~10 s of a car's
+///   drive at LIO-SAM's 1 m keyframe spacing) keep everything;
+/// - an older keyframe is "retired": it stays a "place" (features and cloud
+///   kept) only when no place lies within place_spacing_m (default 2 m,
+///   LIO-SAM's surroundingKeyframeDensity) of its current position estimate;
+///   otherwise its features and cloud are freed (LoopKeyframe::archived) and
+///   only the stamp, the pose (graph node) and the detector's descriptor
+///   remain (Scan Context caches its descriptor before retirement: only
+///   keyframes the detector has seen are retired).
+/// Driving a street again therefore adds nothing once its keyframes retire;
+/// the kept data is bounded by the explored area (~one place per 2 m of
+/// distinct road; max_keyframe_clouds = 0 keeps every keyframe in full, the
+/// unbounded store). Places keep the keyframe frame and the graph pose, so
+/// later loop closures still move them (a world-frame voxel archive would go
+/// stale at every loop correction). Loop verification against an old place
+/// whose own data was dropped builds its submap from the places around it
+/// (loop/loop_verifier.hpp, detail::select_submap). The semantic map is built,
+/// as LIO-SAM's global map, from the kept keyframes (places + recent) at their
+/// optimised poses (LIO-SAM thins its map keyframes at 10 m).
+/// Per keyframe the graph keeps a node and two factors (~1 kB) and the
+/// keyframe list ~0.3 kB; per frame an index and a relative pose (~70 bytes)
+/// are kept. The front end's own local map is bounded by its radius.
 ///
 /// Cost per frame: the odometry plus, on keyframes, a voxel downsample, the
-/// loop detector (linear in keyframes, microseconds) and a window graph
-/// update (constant). A loop closure costs a verification and a full graph
+/// loop detector (linear in keyframes, microseconds), the retirement of one
+/// keyframe (linear in places, microseconds) and a window graph update
+/// (PoseGraphConfig::window_size newest nodes and their factors, constant). A loop closure costs a verification and a full graph
 /// solve; those frames are flagged in the report (loop_checked/loop_closed).
 ///
 /// Not thread-safe; one Slam per sensor stream.
@@ -104,6 +125,8 @@ struct SlamConfig {
   double weak_sigma_rad = 0.1;               ///< weak default: rotation sigma [rad]
   double keyframe_cloud_leaf_m = 0.5;        ///< voxel leaf of the cloud kept per keyframe (Scan Context, map) [m]
   double keyframe_cloud_max_range_m = 80.0;  ///< drop farther points from the kept cloud [m]; 0 = keep all
+  std::size_t max_keyframe_clouds = 100;     ///< newest keyframes kept in full; older ones retire (file comment); 0 = never retire (unbounded)
+  double place_spacing_m = 2.0;              ///< a retiring keyframe keeps its data only when no place is within this distance [m]
 
   /// Throws ConfigError naming the bad field and value.
   void validate() const {
@@ -118,6 +141,7 @@ struct SlamConfig {
     positive(weak_sigma_m, "weak_sigma_m");
     positive(weak_sigma_rad, "weak_sigma_rad");
     positive(keyframe_cloud_leaf_m, "keyframe_cloud_leaf_m");
+    positive(place_spacing_m, "place_spacing_m");
     if (!(min_information <= max_information)) {
       throw ConfigError("SlamConfig.min_information = " + std::to_string(min_information) +
                         " exceeds max_information = " + std::to_string(max_information));
@@ -275,6 +299,13 @@ class Slam {
   /// The settings.
   [[nodiscard]] const Config& config() const noexcept { return config_; }
 
+  /// Indices of the retired keyframes that kept their data (places), oldest first.
+  [[nodiscard]] const std::vector<std::size_t>& places() const noexcept { return places_; }
+  /// Number of retired keyframes whose data was dropped (LoopKeyframe::archived).
+  [[nodiscard]] std::size_t archived_count() const noexcept { return archived_; }
+  /// Number of keyframes retired so far (places + archived).
+  [[nodiscard]] std::size_t retired_count() const noexcept { return next_retire_; }
+
   /// Heap bytes of the stored keyframes (features, clouds, labels).
   [[nodiscard]] std::size_t keyframe_bytes() const noexcept {
     std::size_t b = keyframes_.capacity() * sizeof(LoopKeyframe);
@@ -289,8 +320,9 @@ class Slam {
     return b;
   }
 
-  /// The global semantic map: every keyframe's kept cloud at its optimised
-  /// pose, merged by SemanticMap (map/semantic_map.hpp).
+  /// The global semantic map: the kept keyframe clouds (places + the newest
+  /// max_keyframe_clouds; archived keyframes have none) at their optimised
+  /// poses, merged by SemanticMap (map/semantic_map.hpp).
   [[nodiscard]] Scan semantic_map(const SemanticMapConfig& config = {}) const {
     SemanticMap map(config);
     for (std::size_t k = 0; k < keyframes_.size(); ++k) map.insert(graph_.pose(static_cast<NodeId>(k)), keyframes_[k].cloud, keyframes_[k].labels);
@@ -341,7 +373,10 @@ class Slam {
       kf.surfaces = detail::compact_features(odometry_.features().surfaces);
     }
     keyframes_.push_back(std::move(kf));
-    if (!config_.loop_closure) return;
+    if (!config_.loop_closure) {
+      retire_keyframes();
+      return;
+    }
 
     // Loop closure, rate-limited.
     std::optional<LoopConstraint> loop;
@@ -352,6 +387,9 @@ class Slam {
       loop = closer_.process(keyframes_);
       out.loop_checked = closer_.stats().verified > verified_before;
     }
+    // Retire after the query: the detector has now seen (and cached) every
+    // keyframe up to this one.
+    retire_keyframes();
     SlamLoop record;
     if (loop && loop->from < loop->to && loop->to < keyframes_.size() && loop->information.allFinite() &&
         loop->T_from_to.matrix().allFinite()) {
@@ -389,6 +427,36 @@ class Slam {
     for (std::size_t k = from; k < n; ++k) keyframes_[k].T_world_lidar = graph_.pose(static_cast<NodeId>(k));
   }
 
+  // Retires the keyframes beyond the newest max_keyframe_clouds that the loop
+  // detector has already seen (its last query is at or after their stamp).
+  void retire_keyframes() {
+    if (config_.max_keyframe_clouds == 0) return;
+    while (keyframes_.size() - next_retire_ > config_.max_keyframe_clouds) {
+      LoopKeyframe& kf = keyframes_[next_retire_];
+      if (config_.loop_closure && (!last_query_s_ || kf.stamp_s > *last_query_s_)) return;
+      const Eigen::Vector3d p = kf.T_world_lidar.translation();
+      const double s2 = config_.place_spacing_m * config_.place_spacing_m;
+      bool covered = false;
+      for (const std::size_t j : places_) {
+        if ((keyframes_[j].T_world_lidar.translation() - p).squaredNorm() < s2) {
+          covered = true;
+          break;
+        }
+      }
+      if (covered) {
+        kf.corners = FeatureSet{};
+        kf.surfaces = FeatureSet{};
+        kf.cloud = std::vector<Eigen::Vector3f>{};
+        kf.labels = std::vector<Class>{};
+        kf.archived = true;
+        ++archived_;
+      } else {
+        places_.push_back(next_retire_);
+      }
+      ++next_retire_;
+    }
+  }
+
   void downsample_cloud(const Scan& scan, LoopKeyframe& kf) {
     const double r2 = config_.keyframe_cloud_max_range_m * config_.keyframe_cloud_max_range_m;
     subset_.clear();
@@ -408,6 +476,9 @@ class Slam {
   PoseGraph<SE3d> graph_;
   VoxelGrid cloud_grid_;
   std::vector<LoopKeyframe> keyframes_;
+  std::vector<std::size_t> places_;        // retired keyframes that kept their data
+  std::size_t next_retire_ = 0;            // keyframes [0, next_retire_) are retired
+  std::size_t archived_ = 0;               // retired keyframes whose data was dropped
   std::vector<SE3d> T_odom_kf_;            // odometry pose of each keyframe
   std::vector<std::size_t> keyframe_frame_;
   std::vector<SlamLoop> loops_;
