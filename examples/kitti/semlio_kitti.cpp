@@ -4,12 +4,19 @@
 // (optimised and odometry-only), keyframes, the semantic map and a JSON
 // report; evaluates against ground truth when one is found. See the README
 // ("semlio_kitti") for options and outputs.
+//
+// --imu oxts: lidar-inertial odometry (pipeline/lidar_inertial.hpp) with the
+// sequence's KITTI raw oxts/ folder (a semlio_simulate drive writes one) and
+// Tr_imu_velo from calib.txt; deskew (YAML deskew.mode or --deskew on) is
+// then the LIO's IMU deskew to the sweep start. --imu none (default): the
+// lidar-only pipeline as before.
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <cstdio>
 #include <filesystem>
@@ -18,6 +25,7 @@
 #include <numeric>
 #include <numbers>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <variant>
 #include <vector>
@@ -28,12 +36,15 @@
 #include <semlio/io/kitti_sequence.hpp>
 #include <semlio/io/ply.hpp>
 #include <semlio/io/trajectory.hpp>
+#include <semlio/io/oxts.hpp>
 #include <semlio/pipeline/interpolate.hpp>
+#include <semlio/pipeline/lidar_inertial.hpp>
 #include <semlio/pipeline/presets.hpp>
 #include <semlio/pipeline/slam.hpp>
 #include <semlio/segment/geometric_segmenter.hpp>
 #include <semlio/segment/scan_labels.hpp>
 
+#include "imu_oxts.hpp"
 #include "json_writer.hpp"
 #include "settings_yaml.hpp"
 
@@ -58,6 +69,24 @@ struct Options {
   std::string loop_detector;  // radius|scancontext; empty = the YAML's (default radius)
   bool map_static = false;    // drop movable classes from map.ply
   std::string map = "on";     // write map.ply
+  std::string imu = "none";   // none|oxts
+  std::string deskew;         // on|off; empty = the YAML's deskew.mode
+  std::string imu_time_offset = "auto";  // t_imu = t_lidar + offset [s], or auto
+  std::string velocity_hint = "oxts";    // oxts|none: INS velocity while the LIO initialises
+};
+
+// Lidar-inertial facts of a run (--imu oxts).
+struct ImuRunFacts {
+  bool used = false;
+  double time_offset_s = 0.0;
+  std::size_t samples = 0;
+  long initialized_at = -1;           // frame index (relative to --first), -1: never
+  std::size_t imu_predicted = 0;      // frames whose initial guess came from the IMU
+  std::size_t fallbacks = 0;          // frames with unusable IMU (constant-velocity prediction)
+  std::size_t imu_deskewed = 0;       // sweeps deskewed with the IMU
+  std::size_t rejected = 0;           // samples push_imu rejected (non-finite, not after the previous one)
+  std::string last_issue;             // last fallback / rejection reason
+  std::vector<char> fallback_frame;   // per frame
 };
 
 // Either shipped loop detector behind one type, so that each front end is
@@ -94,6 +123,7 @@ struct RunResult {
   std::size_t graph_factors = 0;
   std::size_t keyframe_bytes = 0;
   semlio::Scan map;
+  ImuRunFacts imu;
 };
 
 // CPU time of the calling thread [ms]: unlike wall time it does not grow
@@ -171,6 +201,62 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
   return result;
 }
 
+// Lidar-inertial run: the LIO around the front end `make` builds, IMU samples
+// pushed up to each sweep's end. poses: the LIO's (inertial graph);
+// odometry: the front end's scan-to-map poses. No back end, no map.
+template <typename Make>
+RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::vector<semlio::ImuSample>& imu,
+                  const std::vector<semlio_examples::OxtsVelocity>& velocities, const semlio::io::KittiSequence& seq,
+                  std::size_t first, std::size_t last, bool quiet) {
+  RunResult result;
+  const std::size_t n = last - first + 1;
+  result.reports.reserve(n);
+  result.back_end.reserve(n);
+  result.imu.used = true;
+  result.imu.time_offset_s = lc.imu_time_offset_s;
+  result.imu.samples = imu.size();
+  semlio::LidarInertialOdometry lio(make, lc);
+  const bool tty = !quiet && isatty(STDERR_FILENO) != 0;
+  std::size_t next = 0;
+  std::size_t next_v = 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = first; i <= last; ++i) {
+    const double cpu_start_ms = thread_cpu_ms();
+    semlio::Scan scan = seq.read(i);
+    const double until = scan.stamp_s + lc.imu_time_offset_s + lc.sweep_period_s + 1e-6;
+    while (next < imu.size() && imu[next].stamp_s <= until) lio.push_imu(imu[next++]);
+    for (; next_v < velocities.size() && velocities[next_v].stamp_s <= until; ++next_v) {
+      lio.push_velocity(velocities[next_v].stamp_s, velocities[next_v].v_imu_mps);
+    }
+    const semlio::LidarInertialReport r = lio.process(scan);
+    result.reports.push_back(r.frame);
+    result.optimised.push_back(r.T_map_lidar);
+    result.odometry.push_back(r.frame.T_map_lidar);
+    result.back_end.push_back({false, false, 0.0, r.frame.timings.total_ms, thread_cpu_ms() - cpu_start_ms});
+    ImuRunFacts& f = result.imu;
+    if (r.initialized && f.initialized_at < 0) f.initialized_at = static_cast<long>(i - first);
+    f.imu_predicted += r.prediction == semlio::PredictionSource::kImu ? 1U : 0U;
+    f.fallbacks += r.imu_fallback ? 1U : 0U;
+    f.imu_deskewed += r.deskew == semlio::DeskewSource::kImu ? 1U : 0U;
+    f.fallback_frame.push_back(r.imu_fallback ? 1 : 0);
+    if (!r.imu_issue.empty()) f.last_issue = r.imu_issue;
+    const std::size_t done = i - first + 1;
+    if (tty && (done % 5 == 0 || done == n)) {
+      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double hz = static_cast<double>(done) / std::max(el, 1e-9);
+      std::fprintf(stderr, "\r[semlio_kitti] frame %zu/%zu  %.1f Hz  ETA %.0f s   ", done, n, hz,
+                   static_cast<double>(n - done) / hz);
+    }
+  }
+  if (tty) std::fprintf(stderr, "\n");
+  result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.ranks = lio.odometry().rank_histogram();
+  result.keyframe_bytes = 0;
+  result.imu.rejected = lio.imu_rejected();
+  if (!lio.last_imu_rejection().empty() && result.imu.last_issue.empty()) result.imu.last_issue = lio.last_imu_rejection();
+  return result;
+}
+
 void write_timings(semlio_examples::JsonWriter& j, const semlio::StageTimings& t) {
   j.key("timings_ms").begin_object();
   j.field("preprocess", t.preprocess_ms).field("segment", t.segment_ms).field("features", t.features_ms);
@@ -212,6 +298,21 @@ int main(int argc, char** argv) {
   app.add_option("--map", opt.map, "write OUT/map.ply, the semantic map (default on)")
       ->check(CLI::IsMember({"on", "off"}));
   app.add_flag("--map-static", opt.map_static, "leave movable classes (cars, people, ...) out of map.ply");
+  app.add_option("--imu", opt.imu,
+                 "oxts: lidar-inertial odometry with the sequence's KITTI raw oxts/ folder and calib.txt's "
+                 "Tr_imu_velo; none (default): lidar only")
+      ->check(CLI::IsMember({"none", "oxts"}));
+  app.add_option("--deskew", opt.deskew,
+                 "deskew sweeps (raw data, --distortion on drives): on = the YAML's deskew settings with mode "
+                 "constant_velocity (with --imu oxts: IMU deskew); default: the YAML's deskew.mode")
+      ->check(CLI::IsMember({"on", "off"}));
+  app.add_option("--imu-time-offset", opt.imu_time_offset,
+                 "t_imu = t_lidar + offset [s]; auto: 0, or first OXTS stamp - first scan stamp when the clocks "
+                 "are more than 1000 s apart (times.txt from 0, OXTS with a date)");
+  app.add_option("--velocity-hint", opt.velocity_hint,
+                 "with --imu oxts: oxts (default) = the OXTS INS velocity guides the front end while the LIO "
+                 "initialises; none = lidar + IMU only")
+      ->check(CLI::IsMember({"oxts", "none"}));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -264,11 +365,64 @@ int main(int argc, char** argv) {
     back_end.slam.validate();
     const bool write_map = opt.map == "on";
     if (opt.kitti_correction != "auto") settings.odometry.kitti_vertical_correction = opt.kitti_correction == "on";
+    if (opt.deskew == "on") settings.deskew.mode = semlio::DeskewMode::kConstantVelocity;
+    if (opt.deskew == "off") settings.deskew.mode = semlio::DeskewMode::kNone;
+    const bool use_imu = opt.imu == "oxts";
+    if (use_imu && back_end.slam.loop_closure) {
+      throw semlio::ConfigError("--imu oxts runs lidar-inertial odometry without the pose-graph back end; "
+                                "--loop on (or YAML slam.loop_closure: true) is not supported with it");
+    }
+
+    // IMU (--imu oxts): samples, extrinsic, clock offset; deskew moves into the LIO.
+    std::vector<semlio::ImuSample> imu;
+    std::vector<semlio_examples::OxtsVelocity> velocities;
+    semlio::LidarInertialConfig lc;
+    if (use_imu) {
+      const fs::path oxts_dir = fs::path(seq.directory()) / "oxts";
+      if (!fs::is_directory(oxts_dir)) {
+        throw semlio::IoError(oxts_dir.string() + ": no OXTS folder (KITTI raw layout: oxts/timestamps.txt, "
+                              "oxts/data/); --imu oxts needs one");
+      }
+      const std::vector<semlio::io::OxtsRecord> records = semlio::io::read_oxts(oxts_dir.string());
+      imu = semlio::io::imu_samples(records);
+      if (opt.velocity_hint == "oxts") velocities = semlio_examples::oxts_velocities(records);
+      const std::string calib_path = opt.calib.empty() ? (fs::path(seq.directory()) / "calib.txt").string() : opt.calib;
+      const std::optional<semlio::io::Calibration> calib =
+          opt.calib.empty() ? seq.calibration() : std::optional(semlio::io::read_kitti_calib(opt.calib));
+      if (!calib || !calib->T_imu_velo) {
+        throw semlio::ConfigError(calib_path + ": no Tr_imu_velo line (lidar -> IMU extrinsic); --imu oxts needs it");
+      }
+      lc.T_imu_lidar = *calib->T_imu_velo;
+      if (opt.imu_time_offset == "auto") {
+        lc.imu_time_offset_s = semlio_examples::auto_imu_time_offset(imu, seq.stamp(first), seq.stamp(0));
+      } else {
+        try {
+          std::size_t used = 0;
+          lc.imu_time_offset_s = std::stod(opt.imu_time_offset, &used);
+          if (used != opt.imu_time_offset.size()) throw std::invalid_argument("trailing characters");
+        } catch (const std::exception&) {
+          throw semlio::ConfigError("--imu-time-offset must be auto or a number of seconds, got '" +
+                                    opt.imu_time_offset + "'");
+        }
+      }
+      lc.deskew = settings.deskew.mode != semlio::DeskewMode::kNone;
+      lc.sweep_period_s = settings.deskew.sweep_period_s;
+      lc.frame_period_s = settings.deskew.frame_period_s;
+      lc.point_times = settings.deskew.point_time_config();
+      settings.deskew.mode = semlio::DeskewMode::kNone;  // the LIO deskews (to the sweep start) before the front end
+    }
 
     RunResult result;
     const bool geometric = opt.labels == "geometric";
     const bool use_labels = geometric || (opt.labels != "none" && seq.has_labels());
     const auto run_preset = [&](auto segmenter) {
+      if (use_imu) {
+        return opt.preset == "baseline"
+                   ? run_lio([&] { return semlio::make_baseline_odometry(segmenter, settings); }, lc, imu, velocities, seq, first,
+                             last_u, opt.quiet)
+                   : run_lio([&] { return semlio::make_full_odometry(segmenter, settings); }, lc, imu, velocities, seq, first,
+                             last_u, opt.quiet);
+      }
       return opt.preset == "baseline"
                  ? run(semlio::make_baseline_odometry(segmenter, settings), back_end, write_map, seq, first, last_u,
                        opt.quiet)
@@ -313,7 +467,7 @@ int main(int argc, char** argv) {
     semlio::io::write_tum_trajectory((out / "poses_tum.txt").string(), tum);
     semlio::io::write_kitti_poses((out / "poses_odom.txt").string(),
                                   Tr ? semlio::io::lidar_to_camera(poses_odom, *Tr) : poses_odom);
-    if (write_map) semlio::io::write_ply((out / "map.ply").string(), result.map);
+    if (write_map && !use_imu) semlio::io::write_ply((out / "map.ply").string(), result.map);
     {
       std::ofstream kf(out / "keyframes.txt");
       kf.precision(9);
@@ -420,7 +574,18 @@ int main(int argc, char** argv) {
       j.field("keyframe_store_bytes_per_keyframe",
               keyframes.empty() ? 0.0 : static_cast<double>(result.keyframe_bytes) / static_cast<double>(keyframes.size()));
       j.end_object();
-      if (write_map) {
+      if (use_imu) {
+        const ImuRunFacts& f = result.imu;
+        j.key("imu").begin_object();
+        j.field("source", "oxts").field("samples", f.samples).field("time_offset_s", f.time_offset_s);
+        j.field("deskew", lc.deskew ? "imu" : "off").field("velocity_hint", opt.velocity_hint);
+        j.field("initialized_at_frame", static_cast<long long>(f.initialized_at < 0 ? -1 : f.initialized_at + static_cast<long>(first)));
+        j.field("imu_predicted_frames", f.imu_predicted).field("fallback_frames", f.fallbacks);
+        j.field("imu_deskewed_frames", f.imu_deskewed).field("rejected_samples", f.rejected);
+        j.field("last_issue", f.last_issue);
+        j.end_object();
+      }
+      if (write_map && !use_imu) {
         j.key("map").begin_object();
         j.field("points", result.map.size()).field("leaf_size_m", back_end.map.leaf_size_m);
         j.field("static_only", back_end.map.drop_dynamic).end_object();
@@ -440,6 +605,7 @@ int main(int argc, char** argv) {
         j.field("backend_ms", result.back_end[i].backend_ms).field("total_ms", result.back_end[i].total_ms);
         j.field("cpu_ms", result.back_end[i].cpu_ms);
         j.field("loop_checked", result.back_end[i].loop_checked).field("loop_closed", result.back_end[i].loop_closed);
+        if (use_imu) j.field("imu_fallback", result.imu.fallback_frame[i] != 0);
         j.end_object();
       }
       j.end_array();
@@ -463,6 +629,15 @@ int main(int argc, char** argv) {
                   result.loop_stats.accepted, result.loop_stats.verified, result.loop_stats.candidates,
                   back_end.loop_detector.c_str());
     }
+    if (use_imu) {
+      const ImuRunFacts& f = result.imu;
+      std::printf("  IMU (oxts)          %zu samples, offset %.6f s, deskew %s; initialised at frame %ld, "
+                  "IMU-predicted frames %zu, fallbacks %zu, rejected samples %zu\n",
+                  f.samples, f.time_offset_s, lc.deskew ? "imu" : "off",
+                  f.initialized_at < 0 ? -1L : f.initialized_at + static_cast<long>(first), f.imu_predicted,
+                  f.fallbacks, f.rejected);
+      if (!f.last_issue.empty()) std::printf("  last IMU issue      %s\n", f.last_issue.c_str());
+    }
     std::printf("  memory              peak RSS %.0f MB, keyframe store %.1f MB\n", static_cast<double>(peak_kb) / 1024.0,
                 static_cast<double>(result.keyframe_bytes) / (1024.0 * 1024.0));
     if (ate_all) {
@@ -475,7 +650,7 @@ int main(int argc, char** argv) {
       std::printf("  no ground truth found: not evaluated\n");
     }
     std::printf("  wrote %s/{poses.txt,poses_odom.txt,poses_tum.txt,keyframes.txt,report.json%s} (%s frame)\n",
-                opt.out.c_str(), write_map ? ",map.ply" : "", Tr ? "camera-0" : "lidar");
+                opt.out.c_str(), write_map && !use_imu ? ",map.ply" : "", Tr ? "camera-0" : "lidar");
     return 0;
   } catch (const semlio::Error& e) {
     std::cerr << "semlio_kitti: " << e.what() << "\n";

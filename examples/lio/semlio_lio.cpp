@@ -7,13 +7,16 @@
 //   semlio_lio --sequence DIR --out DIR [--imu oxts|none] [--deskew on|off]
 //              [--preset baseline|full] [--labels labels|predictions|none]
 //              [--time-offset auto|SECONDS] [--first N] [--last N]
-//              [--kitti-correction on|off|auto] [--quiet]
+//              [--kitti-correction on|off|auto] [--velocity-hint oxts|none] [--quiet]
 //
 // --imu none: the lidar-only front end (constant velocity; --deskew on uses
 // constant-velocity deskew). --time-offset auto: t_imu = t_lidar + offset with
 // offset = first OXTS stamp - first scan stamp when the two clocks are more
 // than 1000 s apart (the simulator's OXTS carries a date, times.txt starts at
-// 0; both start together), else 0.
+// 0; both start together), else 0. --velocity-hint oxts (default with --imu
+// oxts): the OXTS INS velocity (vf, vl, vu) guides the front end while the
+// LIO initialises (LidarInertialOdometry::push_velocity) -- on a straight
+// road entered at cruise speed nothing else observes the along-track motion.
 
 #include <CLI/CLI.hpp>
 
@@ -24,8 +27,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <numbers>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <semlio/eval/ate.hpp>
@@ -39,6 +44,7 @@
 #include <semlio/pipeline/presets.hpp>
 #include <semlio/segment/scan_labels.hpp>
 
+#include "imu_oxts.hpp"
 #include "json_writer.hpp"
 
 namespace fs = std::filesystem;
@@ -55,6 +61,10 @@ struct Options {
   std::string labels = "labels";
   std::string time_offset = "auto";
   std::string kitti_correction = "auto";
+  std::string velocity_hint = "oxts";
+  std::string lidar_information = "hessian";
+  double lidar_residual_sigma_m = -1.0;  // < 0: the library default
+  double degeneracy_ratio = -1.0;        // < 0: the front end's default
   long first = 0;
   long last = -1;
   bool quiet = false;
@@ -72,12 +82,25 @@ struct FrameFacts {
 };
 
 // |cos| of the angle between the translation part of the weakest Hessian
-// direction and the frame's motion (both in the lidar frame).
+// direction and the frame's motion (both in the lidar frame): the true motion
+// when the sequence has ground truth (a front end that did not see the motion
+// along the road has none to compare with), else the estimated one.
 double along_track(const semlio::FrameReport& r, const SE3d& T_prev, const SE3d& T_cur) {
   const Eigen::Vector3d t = r.solve.eigenvectors.col(0).head<3>();
   const Eigen::Vector3d d = (T_prev.inverse() * T_cur).translation();
   if (t.norm() < 1e-9 || d.norm() < 1e-6) return 0.0;
   return std::abs(t.normalized().dot(d.normalized()));
+}
+
+// Sets the solver's relative degeneracy test when it has one.
+template <typename SolverConfig>
+bool set_degeneracy_ratio(SolverConfig& c, double ratio) {
+  if constexpr (requires { c.degeneracy_ratio = ratio; }) {
+    c.degeneracy_ratio = ratio;
+    return true;
+  } else {
+    return false;
+  }
 }
 
 }  // namespace
@@ -98,6 +121,17 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"on", "off", "auto"}));
   app.add_option("--first", opt.first, "first frame (inclusive)");
   app.add_option("--last", opt.last, "last frame (inclusive)");
+  app.add_option("--velocity-hint", opt.velocity_hint,
+                 "oxts: the INS velocity guides the front end while the LIO initialises; none: lidar + IMU only")
+      ->check(CLI::IsMember({"oxts", "none"}));
+  app.add_option("--lidar-information", opt.lidar_information,
+                 "front-end pose information in the inertial graph: hessian (scan-to-map Hessian, capped) or diagonal")
+      ->check(CLI::IsMember({"hessian", "diagonal"}));
+  app.add_option("--lidar-residual-sigma", opt.lidar_residual_sigma_m,
+                 "residual sigma turning the Hessian into information [m] (default: the library's)");
+  app.add_option("--degeneracy-ratio", opt.degeneracy_ratio,
+                 "scan-to-map solver: degenerate when an eigenvalue is below this x the mean diagonal of its part "
+                 "of H (when the solver supports it; default: the front end's)");
   app.add_flag("--quiet", opt.quiet, "no progress output");
   try {
     app.parse(argc, argv);
@@ -126,10 +160,28 @@ int main(int argc, char** argv) {
 
     // IMU and extrinsic.
     std::vector<semlio::ImuSample> imu;
+    std::vector<semlio_examples::OxtsVelocity> velocities;
     semlio::LidarInertialConfig lc;
     lc.deskew = deskew;
+    lc.lidar_information =
+        opt.lidar_information == "diagonal" ? semlio::LidarInformation::kDiagonal : semlio::LidarInformation::kHessian;
+    if (opt.lidar_residual_sigma_m > 0.0) lc.lidar_residual_sigma_m = opt.lidar_residual_sigma_m;
+    if (opt.degeneracy_ratio >= 0.0) {
+      if (!set_degeneracy_ratio(settings.odometry.solver, opt.degeneracy_ratio)) {
+        std::cerr << "semlio_lio: this build's solver has no degeneracy_ratio; --degeneracy-ratio ignored\n";
+      }
+    }
+    // Per-point times from the azimuth (.bin scans carry none): KITTI raw
+    // sweeps start facing forward, the simulator's facing backwards; both spin
+    // clockwise. A wrong start shifts half of every sweep by half a period.
+    semlio::PointTimeConfig point_times;
+    if (simulated) point_times.start_azimuth_rad = std::numbers::pi;
+    lc.point_times = point_times;
     if (opt.imu == "oxts") {
-      imu = semlio::io::imu_samples(semlio::io::read_oxts((fs::path(seq.directory()) / "oxts").string()));
+      const std::vector<semlio::io::OxtsRecord> records =
+          semlio::io::read_oxts((fs::path(seq.directory()) / "oxts").string());
+      imu = semlio::io::imu_samples(records);
+      if (opt.velocity_hint == "oxts") velocities = semlio_examples::oxts_velocities(records);
       if (!seq.calibration() || !seq.calibration()->T_imu_velo) {
         std::cerr << "semlio_lio: " << seq.directory() << "/calib.txt has no Tr_imu_velo (lidar -> IMU extrinsic)\n";
         return 2;
@@ -143,6 +195,13 @@ int main(int argc, char** argv) {
       }
     }
 
+    std::vector<SE3d> gt_motion_ref;  // ground truth per frame (lidar), for the along-track measure
+    if (seq.has_ground_truth()) gt_motion_ref = seq.ground_truth_lidar();
+    // Motion reference of frame i: (previous pose, this pose), true when known.
+    const auto motion_ref = [&](std::size_t i, const SE3d& T_prev_est, const SE3d& T_cur_est) {
+      if (i > 0 && i < gt_motion_ref.size()) return std::pair<SE3d, SE3d>(gt_motion_ref[i - 1], gt_motion_ref[i]);
+      return std::pair<SE3d, SE3d>(T_prev_est, T_cur_est);
+    };
     std::vector<FrameFacts> facts;
     facts.reserve(last_u - first + 1);
     std::optional<std::size_t> init_frame;
@@ -159,17 +218,25 @@ int main(int argc, char** argv) {
       if (opt.imu == "oxts") {
         semlio::LidarInertialOdometry lio(make, lc);
         std::size_t next = 0;
+        std::size_t next_v = 0;
         SE3d T_prev;
         run([&](semlio::Scan& scan, std::size_t i) {
           const double until = scan.stamp_s + lc.imu_time_offset_s + lc.sweep_period_s + 1e-6;
           while (next < imu.size() && imu[next].stamp_s <= until) lio.push_imu(imu[next++]);
+          while (next_v < velocities.size() && velocities[next_v].stamp_s <= until) {
+            lio.push_velocity(velocities[next_v].stamp_s, velocities[next_v].v_imu_mps);
+            ++next_v;
+          }
           const semlio::LidarInertialReport r = lio.process(scan);
           if (r.initialized && !init_frame) init_frame = i;
           FrameFacts f;
           f.T_map_lidar = r.T_map_lidar;
           f.status = semlio::to_string(r.frame.status);
           f.degenerate = r.frame.solve.degenerate();
-          if (f.degenerate) f.degenerate_along_track = along_track(r.frame, T_prev, r.frame.T_map_lidar);
+          if (f.degenerate) {
+            const auto [A, B] = motion_ref(i, T_prev, r.frame.T_map_lidar);
+            f.degenerate_along_track = along_track(r.frame, A, B);
+          }
           f.imu_predicted = r.prediction == semlio::PredictionSource::kImu;
           f.imu_fallback = r.imu_fallback;
           f.total_ms = r.frame.timings.total_ms;
@@ -179,14 +246,17 @@ int main(int argc, char** argv) {
       } else {
         auto odometry = make();
         SE3d T_prev;
-        run([&](semlio::Scan& scan, std::size_t /*i*/) {
-          if (deskew && !scan.has_times()) semlio::assign_times_from_azimuth(scan);
+        run([&](semlio::Scan& scan, std::size_t i) {
+          if (deskew && !scan.has_times()) semlio::assign_times_from_azimuth(scan, point_times);
           const semlio::FrameReport r = odometry.process(scan);
           FrameFacts f;
           f.T_map_lidar = r.T_map_lidar;
           f.status = semlio::to_string(r.status);
           f.degenerate = r.solve.degenerate();
-          if (f.degenerate) f.degenerate_along_track = along_track(r, T_prev, r.T_map_lidar);
+          if (f.degenerate) {
+            const auto [A, B] = motion_ref(i, T_prev, r.T_map_lidar);
+            f.degenerate_along_track = along_track(r, A, B);
+          }
           f.total_ms = r.timings.total_ms;
           T_prev = r.T_map_lidar;
           return f;
@@ -255,6 +325,8 @@ int main(int argc, char** argv) {
     j.field("sequence", seq.directory()).field("imu", opt.imu).field("deskew", opt.deskew).field("preset", opt.preset);
     j.field("frames", static_cast<double>(facts.size())).field("wall_s", wall_s);
     j.field("imu_time_offset_s", lc.imu_time_offset_s);
+    j.field("velocity_hint", opt.imu == "oxts" ? opt.velocity_hint : "none");
+    j.field("lidar_information", opt.lidar_information).field("lidar_residual_sigma_m", lc.lidar_residual_sigma_m);
     j.field("initialized_at_frame", init_frame ? static_cast<double>(*init_frame) : -1.0);
     j.field("imu_predicted_frames", static_cast<double>(imu_predicted));
     j.field("imu_fallback_frames", static_cast<double>(fallbacks));

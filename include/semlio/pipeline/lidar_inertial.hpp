@@ -9,8 +9,11 @@
 ///              initial guess (Odometry::process's prior) -> optional IMU
 ///              deskew of the sweep -> scan-to-map odometry -> new state in a
 ///              sliding-window inertial graph with the IMU factor, the bias
-///              random walk and the front end's pose (degenerate directions
-///              of the scan-to-map solve get no information) -> optimise.
+///              random walk and the front end's pose -> optimise. The
+///              pose's information follows the scan-to-map Hessian
+///              (lidar_pose_information(): weakly constrained directions,
+///              e.g. along a straight road, get little and flagged
+///              degenerate ones none), so the IMU carries those directions.
 ///
 /// Start-up: the first frames run lidar-only (constant velocity) until
 /// `init.min_frames` tracked poses exist; initialize_inertial() then gives
@@ -44,12 +47,17 @@
 /// end: construct the LIO from a factory (a callable returning the front end,
 /// e.g. `[&] { return make_baseline_odometry(ScanLabels{}, settings); }`);
 /// constructed from a front end object, the LIO restarts only when that
-/// front end is copyable, and otherwise keeps its first map. Scans without per-point times
-/// get them from the azimuth (assign_times_from_azimuth, KITTI convention).
+/// front end is copyable, and otherwise keeps its first map. Scans without
+/// per-point times get them from the azimuth with config.point_times
+/// (assign_times_from_azimuth; default KITTI raw: clockwise from the front;
+/// the simulator's sweeps start facing backwards: start_azimuth_rad = pi --
+/// a wrong start misplaces half of each sweep by half a sweep's motion).
 /// Not thread-safe: one instance per sensor stream.
 
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
+
+#include <algorithm>
 
 #include <cmath>
 #include <concepts>
@@ -74,9 +82,23 @@
 #include <semlio/imu/nav_state.hpp>
 #include <semlio/imu/preintegration.hpp>
 #include <semlio/lie/se3.hpp>
+#include <semlio/lie/so3.hpp>
 #include <semlio/pipeline/odometry.hpp>
+#include <semlio/solve/gauss_newton.hpp>
 
 namespace semlio {
+
+/// How the front end's pose enters the inertial graph.
+enum class LidarInformation {
+  /// Diagonal sigmas (lidar_position_sigma_m, lidar_rotation_sigma_rad), with
+  /// nothing along the directions the solve flagged degenerate.
+  kDiagonal,
+  /// The scan-to-map Hessian scaled by 1 / lidar_residual_sigma_m^2 and capped
+  /// by the diagonal sigmas, per direction (lidar_pose_information()): weakly
+  /// constrained directions (a straight road's along-track axis, flagged
+  /// degenerate or not) get little information, so the IMU carries them.
+  kHessian,
+};
 
 /// Settings of LidarInertialOdometry. Defaults: the simulator's IMU, KITTI's
 /// 10 Hz lidar.
@@ -90,6 +112,13 @@ struct LidarInertialConfig {
   InertialGraphConfig graph{};       ///< sliding window (10 states by default)
   double lidar_position_sigma_m = 0.05;    ///< front-end pose noise, translation (1 sigma) [m]
   double lidar_rotation_sigma_rad = 0.005; ///< front-end pose noise, rotation (1 sigma) [rad]
+  /// Shape of the front end's pose information (see LidarInformation).
+  LidarInformation lidar_information = LidarInformation::kHessian;
+  /// Residual noise that turns the front end's Hessian J^T W J into an
+  /// information (kHessian): H / sigma^2, then capped by the diagonal sigmas
+  /// above. Larger than a single point's noise because the residuals are
+  /// correlated (shared map planes) [m].
+  double lidar_residual_sigma_m = 0.5;
   double init_velocity_sigma_mps = 0.2;    ///< prior on the first state's velocity [m/s]
   double init_gyro_bias_sigma_radps = 1e-3;   ///< prior on the gyro bias after initialisation [rad/s]
   double init_accel_bias_sigma_mps2 = 0.1;    ///< prior on the accel bias after initialisation [m/s^2]
@@ -140,6 +169,81 @@ struct LidarInertialReport {
   std::size_t imu_rejected = 0; ///< push_imu rejections so far
 };
 
+/// Information (6x6, lidar tangent [rho; phi], right perturbation) of a
+/// scan-to-map pose for the inertial graph. Directions the solve flagged
+/// degenerate get none in either mode: the remapped solve copied the
+/// prediction (the IMU's own) there. kDiagonal: the configured sigmas.
+/// kHessian: with D = diag(1/sigma_p, 1/sigma_r), the whitened Hessian
+/// M = D^-1 (H / sigma_res^2) D^-1 = U diag(mu) U^T gives
+/// Omega = D U diag(mu / (1 + mu)) U^T D: the diagonal sigmas where the scan
+/// constrains the pose well (mu >> 1), the scan's own (small) information
+/// where it does not. A non-finite Hessian falls back to kDiagonal.
+inline Eigen::Matrix<double, 6, 6> lidar_pose_information(const SolveReport& solve, const LidarInertialConfig& c) {
+  using Matrix6 = Eigen::Matrix<double, 6, 6>;
+  using Vector6 = Eigen::Matrix<double, 6, 1>;
+  Vector6 d;  // sqrt of the diagonal information
+  d << Eigen::Vector3d::Constant(1.0 / c.lidar_position_sigma_m), Eigen::Vector3d::Constant(1.0 / c.lidar_rotation_sigma_rad);
+  Matrix6 info = d.cwiseAbs2().asDiagonal();
+  if (c.lidar_information == LidarInformation::kHessian && solve.hessian.allFinite() &&
+      solve.hessian.diagonal().maxCoeff() > 0.0) {
+    const Vector6 d_inv = d.cwiseInverse();
+    const Matrix6 M = d_inv.asDiagonal() * (solve.hessian / (c.lidar_residual_sigma_m * c.lidar_residual_sigma_m)) *
+                      d_inv.asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Matrix6> es(0.5 * (M + M.transpose()));
+    Vector6 mu = es.eigenvalues().cwiseMax(0.0);
+    for (int k = 0; k < 6; ++k) mu[k] = mu[k] / (1.0 + mu[k]);
+    info = d.asDiagonal() * es.eigenvectors() * mu.asDiagonal() * es.eigenvectors().transpose() * d.asDiagonal();
+  }
+  if (solve.degenerate_directions > 0 && solve.eigenvectors.allFinite()) {
+    Matrix6 P = Matrix6::Identity();
+    for (int k = 0; k < std::min(solve.degenerate_directions, 6); ++k) {
+      const Vector6 v = solve.eigenvectors.col(k).normalized();
+      P -= v * v.transpose();
+    }
+    info = P.transpose() * info * P;
+  }
+  return info;
+}
+
+/// Deskews a sweep in place to its start (the lidar frame at scan.stamp_s)
+/// from a lidar-inertial state: `x_start` is the IMU state at the sweep start
+/// (t_imu = stamp + c.imu_time_offset_s) in the map frame, `gravity_map_mps2`
+/// gravity there; the gyro gives the rotation, the accelerometer (bias removed,
+/// lever arm included) the translation from the lidar's velocity at the start
+/// (ImuDeskew::set_motion). Per-point times: the scan's, else from the azimuth
+/// (c.point_times). ValueError when the samples do not cover the sweep, go
+/// backwards or have a gap above c.imu.max_gap_s.
+inline void deskew_sweep_imu(Scan& scan, std::span<const ImuSample> imu, const NavState& x_start, const ImuBias& bias,
+                             const Eigen::Vector3d& gravity_map_mps2, const LidarInertialConfig& c) {
+  if (scan.empty()) return;
+  if (!scan.has_times()) assign_times_from_azimuth(scan, c.point_times);
+  ImuDeskew d({.target = DeskewTarget::kStart,
+               .frame_period_s = c.frame_period_s,
+               .sweep_period_s = c.sweep_period_s,
+               .T_imu_lidar = c.T_imu_lidar,
+               .imu_time_offset_s = c.imu_time_offset_s,
+               .max_gap_s = c.imu.max_gap_s});
+  d.set_imu(imu);
+  d.set_bias(bias);
+  const double t_imu = scan.stamp_s + c.imu_time_offset_s;
+  // Angular rate at the sweep start (linear between samples), bias removed.
+  Eigen::Vector3d w_imu = imu.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(imu.back().gyro_radps);
+  for (std::size_t k = 0; k < imu.size(); ++k) {
+    if (imu[k].stamp_s >= t_imu) {
+      w_imu = k > 0 ? Eigen::Vector3d(interpolate_imu(imu[k - 1], imu[k], t_imu).gyro_radps)
+                    : Eigen::Vector3d(imu[k].gyro_radps);
+      break;
+    }
+  }
+  w_imu -= bias.gyro_radps;
+  // Lidar velocity: v_L = v_I + R_world_imu (w x r), r = lidar origin in the IMU frame.
+  const Eigen::Vector3d v_lidar_map =
+      x_start.v_world_mps + x_start.R_world_imu.matrix() * w_imu.cross(c.T_imu_lidar.translation());
+  const Eigen::Matrix3d R_map_lidar = (x_start.pose() * c.T_imu_lidar).rotation();
+  d.set_motion(R_map_lidar.transpose() * v_lidar_map, R_map_lidar.transpose() * gravity_map_mps2);
+  d.deskew(scan, SE3d());
+}
+
 /// Lidar-inertial odometry around a lidar front end (see the file comment).
 template <typename OdometryT>
 class LidarInertialOdometry {
@@ -181,6 +285,7 @@ class LidarInertialOdometry {
     positive(config_.init_gyro_bias_sigma_radps, "init_gyro_bias_sigma_radps");
     positive(config_.init_accel_bias_sigma_mps2, "init_accel_bias_sigma_mps2");
     positive(config_.reanchor_velocity_sigma_mps, "reanchor_velocity_sigma_mps");
+    positive(config_.lidar_residual_sigma_m, "lidar_residual_sigma_m");
     positive(config_.sweep_period_s, "sweep_period_s");
     positive(config_.frame_period_s, "frame_period_s");
     if (!(config_.imu.gravity_world_mps2.norm() > 0.0)) {
@@ -202,6 +307,23 @@ class LidarInertialOdometry {
       last_push_issue_ = e.what();
       return false;
     }
+  }
+
+  /// Adds a velocity measurement of the IMU, in the IMU frame at IMU time
+  /// stamp_s (KITTI raw OXTS: vf, vl, vu rotated by roll and pitch; see
+  /// oxts_velocities in examples/common/imu_oxts.hpp). Used only while
+  /// initialising: the front end's initial guess is then this velocity with
+  /// the gyro's rotation instead of its constant-velocity model, and the
+  /// initial state takes it as its velocity. On a road that does not
+  /// constrain the along-track motion (a straight highway entered at cruise
+  /// speed) it is the only source of that motion -- neither the lidar nor the
+  /// IMU (no acceleration) observes it. Returns false for a non-finite one or
+  /// one not after the previous.
+  bool push_velocity(double stamp_s, const Eigen::Vector3d& v_imu_mps) {
+    if (!std::isfinite(stamp_s) || !v_imu_mps.allFinite()) return false;
+    if (!velocities_.empty() && !(stamp_s > velocities_.back().first)) return false;
+    velocities_.emplace_back(stamp_s, v_imu_mps);
+    return true;
   }
 
   /// Processes one scan (see the file comment). The scan is consumed as the
@@ -282,19 +404,55 @@ class LidarInertialOdometry {
       odometry_.emplace(make_());
       make_ = nullptr;
       LidarInertialReport dummy;
-      for (Scan& sc : first_scans_) {
+      for (std::size_t k = 0; k < first_scans_.size(); ++k) {
+        Scan& sc = first_scans_[k];
         deskew_cv(sc, motion, dummy);
-        odometry_->process(sc);
+        // The second sweep starts from where it was tracked (a velocity hint may have placed it).
+        odometry_->process(sc, k == 1 ? std::optional<SE3d>(T_last_lidar_) : std::nullopt);
       }
     }
     first_scans_.clear();
   }
 
+  // The pushed velocity (IMU frame) nearest to IMU time t, within 0.2 s.
+  [[nodiscard]] std::optional<Eigen::Vector3d> velocity_near(double t_imu) const {
+    if (velocities_.empty()) return std::nullopt;
+    const auto* best = &velocities_.front();
+    for (const auto& v : velocities_) {
+      if (std::abs(v.first - t_imu) < std::abs(best->first - t_imu)) best = &v;
+    }
+    if (std::abs(best->first - t_imu) > 0.2) return std::nullopt;
+    return best->second;
+  }
+
+  // Lidar motion T_prev_current from the velocity measurement nearest to the
+  // previous scan (within 0.2 s) and the gyro's rotation since then; nullopt
+  // without one. At the first scan: the motion over one frame period ahead.
+  [[nodiscard]] std::optional<SE3d> velocity_motion(double stamp_s) const {
+    if (velocities_.empty()) return std::nullopt;
+    const double t1 = stamp_s + config_.imu_time_offset_s;
+    const double t0 = frames_ > 0 && stamp_s - last_stamp_s_ > 1e-6 ? last_stamp_s_ + config_.imu_time_offset_s
+                                                                    : t1 - config_.frame_period_s;
+    const std::optional<Eigen::Vector3d> v_imu = velocity_near(t0);
+    if (!v_imu) return std::nullopt;
+    // Rotation: gyro (no bias known yet) over [t0, t1], rectangle rule per sample interval.
+    SO3d R;
+    const std::span<const ImuSample> s = buffer_.samples();
+    for (std::size_t k = 0; k + 1 < s.size(); ++k) {
+      const double a = std::max(s[k].stamp_s, t0);
+      const double b = std::min(s[k + 1].stamp_s, t1);
+      if (b > a) R = R * SO3d::exp(0.5 * (s[k].gyro_radps + s[k + 1].gyro_radps) * (b - a));
+    }
+    const SE3d T_imu_prev_cur(R, *v_imu * (t1 - t0));
+    return T_lidar_imu_ * T_imu_prev_cur * config_.T_imu_lidar;
+  }
+
   void process_initializing(Scan& scan, LidarInertialReport& rep) {
     if (config_.deskew && frames_ < 2 && make_) first_scans_.push_back(scan);
     if (config_.deskew && frames_ == 2) restart_deskewed();
-    deskew_cv(scan, cv_motion(scan.stamp_s), rep);
-    rep.frame = odometry_->process(scan);
+    const std::optional<SE3d> hint = velocity_motion(scan.stamp_s);
+    deskew_cv(scan, hint ? *hint : cv_motion(scan.stamp_s), rep);
+    rep.frame = odometry_->process(scan, hint && frames_ > 0 ? std::optional<SE3d>(T_last_lidar_ * *hint) : std::nullopt);
     rep.T_map_lidar = rep.frame.T_map_lidar;
     if (rep.frame.status == OdometryStatus::kTimeWentBackwards) return;
     T_prev_lidar_ = T_last_lidar_;
@@ -328,7 +486,14 @@ class LidarInertialOdometry {
         Eigen::Vector3d::Constant(config_.lidar_rotation_sigma_rad), Eigen::Vector3d::Constant(config_.init_velocity_sigma_mps),
         Eigen::Vector3d::Constant(config_.init_gyro_bias_sigma_radps),
         Eigen::Vector3d::Constant(config_.init_accel_bias_sigma_mps2);
-    anchor(scan.stamp_s + config_.imu_time_offset_s, r.states.back(), r.bias, sigma, rep);
+    NavState x0 = r.states.back();
+    // A velocity measurement at this scan (push_velocity) replaces the
+    // estimate from the lidar poses, which is biased where the lidar does
+    // not observe the along-track motion.
+    if (const auto v = velocity_near(scan.stamp_s + config_.imu_time_offset_s)) {
+      x0.v_world_mps = x0.R_world_imu.matrix() * *v;
+    }
+    anchor(scan.stamp_s + config_.imu_time_offset_s, x0, r.bias, sigma, rep);
     initialized_ = true;
   }
 
@@ -342,25 +507,11 @@ class LidarInertialOdometry {
     rep.T_map_lidar = graph_.node(id).state.pose() * config_.T_imu_lidar;
   }
 
-  // Information of the front end's pose in the IMU tangent: diagonal sigmas,
-  // nothing along the solve's degenerate directions (those were copied from
-  // the prediction, i.e. from the IMU itself).
+  // Information of the front end's pose in the IMU tangent.
   [[nodiscard]] Eigen::Matrix<double, 6, 6> pose_information(const FrameReport& f) const {
-    using Matrix6 = Eigen::Matrix<double, 6, 6>;
-    Eigen::Matrix<double, 6, 1> d;
-    d << Eigen::Vector3d::Constant(1.0 / (config_.lidar_position_sigma_m * config_.lidar_position_sigma_m)),
-        Eigen::Vector3d::Constant(1.0 / (config_.lidar_rotation_sigma_rad * config_.lidar_rotation_sigma_rad));
-    Matrix6 info = d.asDiagonal();
-    if (f.solve.degenerate_directions > 0 && f.solve.eigenvectors.allFinite()) {
-      Matrix6 P = Matrix6::Identity();
-      for (int k = 0; k < std::min(f.solve.degenerate_directions, 6); ++k) {
-        const Eigen::Matrix<double, 6, 1> v = f.solve.eigenvectors.col(k).normalized();
-        P -= v * v.transpose();
-      }
-      info = P.transpose() * info * P;
-    }
+    const Eigen::Matrix<double, 6, 6> info = lidar_pose_information(f.solve, config_);
     // xi_imu = Ad(T_imu_lidar) xi_lidar: Omega_imu = A^-T Omega_lidar A^-1.
-    const Matrix6 A_inv = T_lidar_imu_.adjoint();
+    const Eigen::Matrix<double, 6, 6> A_inv = T_lidar_imu_.adjoint();
     return A_inv.transpose() * info * A_inv;
   }
 
@@ -384,31 +535,8 @@ class LidarInertialOdometry {
       const SE3d T_prev_current = prior ? T_last_lidar_.inverse() * *prior : cv_motion(scan.stamp_s);
       bool done = false;
       if (predicted) {
-        ensure_times(scan);
         try {
-          ImuDeskew d({.target = DeskewTarget::kStart,
-                       .frame_period_s = config_.frame_period_s,
-                       .sweep_period_s = config_.sweep_period_s,
-                       .T_imu_lidar = config_.T_imu_lidar,
-                       .imu_time_offset_s = config_.imu_time_offset_s,
-                       .max_gap_s = config_.imu.max_gap_s});
-          d.set_imu(buffer_.samples());
-          d.set_bias(last.bias);
-          const Eigen::Matrix3d R_map_lidar = prior->rotation();
-          const std::span<const ImuSample> s = buffer_.samples();
-          Eigen::Vector3d w_imu = s.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(s.back().gyro_radps);
-          for (const ImuSample& x : s) {  // rate at the sweep start
-            if (x.stamp_s >= t_imu) {
-              w_imu = x.gyro_radps;
-              break;
-            }
-          }
-          w_imu -= last.bias.gyro_radps;
-          const Eigen::Vector3d v_lidar_map =
-              predicted->v_world_mps +
-              predicted->R_world_imu.matrix() * w_imu.cross(config_.T_imu_lidar.translation());
-          d.set_motion(R_map_lidar.transpose() * v_lidar_map, R_map_lidar.transpose() * gravity_map_);
-          d.deskew(scan, T_prev_current);
+          deskew_sweep_imu(scan, buffer_.samples(), *predicted, last.bias, gravity_map_, config_);
           rep.deskew = DeskewSource::kImu;
           done = true;
         } catch (const ValueError& e) {
@@ -462,6 +590,7 @@ class LidarInertialOdometry {
       keep_from = last_stamp_s_ + config_.imu_time_offset_s;
     }
     buffer_.drop_before(keep_from - 0.5);
+    while (!velocities_.empty() && velocities_.front().first < keep_from - 0.5) velocities_.erase(velocities_.begin());
   }
 
   Config config_;
@@ -483,6 +612,7 @@ class LidarInertialOdometry {
   std::string last_push_issue_;
   std::function<OdometryT()> make_;  // builds a fresh front end for the deskew restart
   std::vector<Scan> first_scans_;   // the first two sweeps, kept for the restart
+  std::vector<std::pair<double, Eigen::Vector3d>> velocities_;  // push_velocity: (IMU time, IMU-frame velocity)
 };
 
 /// Deduction guide: a factory gives the front end's type.
