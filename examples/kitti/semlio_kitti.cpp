@@ -149,6 +149,15 @@ long peak_rss_kb() {
   return 0;
 }
 
+// Terminal progress line (frame i/N, Hz, ETA), refreshed every 5 frames.
+void show_progress(std::size_t done, std::size_t n, std::chrono::steady_clock::time_point start) {
+  if (done % 5 != 0 && done != n) return;
+  const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double hz = static_cast<double>(done) / std::max(el, 1e-9);
+  std::fprintf(stderr, "\r[semlio_kitti] frame %zu/%zu  %.1f Hz  ETA %.0f s   ", done, n, hz,
+               static_cast<double>(n - done) / hz);
+}
+
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -177,13 +186,7 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
     const semlio::SlamFrameReport r = slam.process(scan);
     result.reports.push_back(r.odometry);
     result.back_end.push_back({r.loop_checked, r.loop_closed, r.backend_ms, r.total_ms, thread_cpu_ms() - cpu_start_ms});
-    const std::size_t done = i - first + 1;
-    if (tty && (done % 5 == 0 || done == n)) {
-      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const double hz = static_cast<double>(done) / std::max(el, 1e-9);
-      std::fprintf(stderr, "\r[semlio_kitti] frame %zu/%zu  %.1f Hz  ETA %.0f s   ", done, n, hz,
-                   static_cast<double>(n - done) / hz);
-    }
+    if (tty) show_progress(i - first + 1, n, start);
   }
   if (tty) std::fprintf(stderr, "\n");
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -240,13 +243,7 @@ RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::v
     f.imu_deskewed += r.deskew == semlio::DeskewSource::kImu ? 1U : 0U;
     f.fallback_frame.push_back(r.imu_fallback ? 1 : 0);
     if (!r.imu_issue.empty()) f.last_issue = r.imu_issue;
-    const std::size_t done = i - first + 1;
-    if (tty && (done % 5 == 0 || done == n)) {
-      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      const double hz = static_cast<double>(done) / std::max(el, 1e-9);
-      std::fprintf(stderr, "\r[semlio_kitti] frame %zu/%zu  %.1f Hz  ETA %.0f s   ", done, n, hz,
-                   static_cast<double>(n - done) / hz);
-    }
+    if (tty) show_progress(i - first + 1, n, start);
   }
   if (tty) std::fprintf(stderr, "\n");
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
