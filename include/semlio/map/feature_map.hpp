@@ -62,6 +62,7 @@
 #include <semlio/core/error.hpp>
 #include <semlio/core/labels.hpp>
 #include <semlio/features/pca.hpp>
+#include <semlio/search/k_best.hpp>
 #include <semlio/search/kdtree.hpp>
 
 namespace semlio {
@@ -140,23 +141,6 @@ inline float float_gate(double max_sq_dist) {
   float c = static_cast<float>(max_sq_dist);
   if (static_cast<double>(c) > max_sq_dist) c = std::nextafter(c, -std::numeric_limits<float>::infinity());
   return c;
-}
-
-/// Inserts (d, i) into the ascending (distance, index) list idx/d2 of size
-/// count and capacity k; returns the new size.
-inline std::size_t insert_by_distance_index(float d, std::uint32_t i, std::uint32_t* idx, float* d2, std::size_t count,
-                                 std::size_t k) {
-  const auto less = [](float a, std::uint32_t ia, float b, std::uint32_t ib) { return a < b || (a == b && ia < ib); };
-  if (count == k && !less(d, i, d2[k - 1], idx[k - 1])) return count;
-  std::size_t j = count < k ? count : k - 1;
-  while (j > 0 && less(d, i, d2[j - 1], idx[j - 1])) {
-    d2[j] = d2[j - 1];
-    idx[j] = idx[j - 1];
-    --j;
-  }
-  d2[j] = d;
-  idx[j] = i;
-  return count < k ? count + 1 : count;
 }
 
 /// Normal consistency (eq. 7, unoriented: acos(|n1.n2|) < threshold, written

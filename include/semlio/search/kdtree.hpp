@@ -28,6 +28,8 @@
 #include <limits>
 #include <memory>
 #include <utility>
+
+#include <semlio/search/k_best.hpp>
 #include <vector>
 
 namespace semlio {
@@ -85,16 +87,7 @@ class KnnTieResult {
 
   bool addPoint(float d, std::uint32_t index) {
     if (d > cap_) return true;
-    if (full() && !less(d, index, dist_[count_ - 1], idx_[count_ - 1])) return true;
-    std::size_t i = (count_ < capacity_) ? count_ : capacity_ - 1;
-    while (i > 0 && less(d, index, dist_[i - 1], idx_[i - 1])) {
-      dist_[i] = dist_[i - 1];
-      idx_[i] = idx_[i - 1];
-      --i;
-    }
-    dist_[i] = d;
-    idx_[i] = index;
-    if (count_ < capacity_) ++count_;
+    count_ = detail::insert_by_distance_index(d, index, idx_, dist_, count_, capacity_);
     if (full()) worst_ = next_up(dist_[count_ - 1]);  // <= next_up(cap_): accepted d <= cap_
     return true;
   }
@@ -104,10 +97,6 @@ class KnnTieResult {
   [[nodiscard]] float worstDist() const { return worst_; }
 
  private:
-  static bool less(float d, std::uint32_t i, float d2, std::uint32_t i2) {
-    return d < d2 || (d == d2 && i < i2);
-  }
-
   std::uint32_t* idx_;
   float* dist_;
   std::size_t capacity_;

@@ -24,6 +24,8 @@
 #include <limits>
 #include <vector>
 
+#include <semlio/search/k_best.hpp>
+
 namespace semlio {
 
 /// Static 3D k-d tree over a copy of the points, rebuilt in place with no
@@ -83,21 +85,7 @@ class SmallKdTree3f {
     std::size_t count;
     [[nodiscard]] bool full() const { return count == k; }
     // Admits (d, i) when it beats the current k-th by (distance, index).
-    void add(float d, std::uint32_t i) {
-      const auto less = [](float a, std::uint32_t ia, float b, std::uint32_t ib) {
-        return a < b || (a == b && ia < ib);
-      };
-      if (full() && !less(d, i, d2[k - 1], idx[k - 1])) return;
-      std::size_t j = full() ? k - 1 : count;
-      while (j > 0 && less(d, i, d2[j - 1], idx[j - 1])) {
-        d2[j] = d2[j - 1];
-        idx[j] = idx[j - 1];
-        --j;
-      }
-      d2[j] = d;
-      idx[j] = i;
-      if (!full()) ++count;
-    }
+    void add(float d, std::uint32_t i) { count = detail::insert_by_distance_index(d, i, idx, d2, count, k); }
   };
 
   static float sq_dist(const Eigen::Vector3f& q, const Eigen::Vector3f& p) {
