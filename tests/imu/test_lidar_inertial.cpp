@@ -15,6 +15,7 @@
 #include <semlio/pipeline/presets.hpp>
 #include <semlio/segment/scan_labels.hpp>
 #include <semlio/sim/simulator.hpp>
+#include <semlio_test/imu_inertial_drive.hpp>
 
 using namespace semlio;
 
@@ -32,14 +33,7 @@ struct Drive {
 };
 
 Drive make_drive(bool distortion) {
-  sim::SimulatorConfig c;
-  c.world = sim::WorldKind::kUrban;
-  c.traffic = sim::TrafficLevel::kNone;
-  c.frames = kFrames;
-  c.seed = 4;
-  c.distortion = distortion;
-  c.lidar.azimuth_steps = 720;  // small scans: a fast test
-  c.threads = 2;
+  const sim::SimulatorConfig c = semlio_test::small_lidar_drive_config(kFrames, distortion);
   const sim::Simulator s(c);
   Drive d;
   d.gt = s.lidar_poses();

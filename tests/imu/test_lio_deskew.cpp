@@ -22,6 +22,7 @@
 #include <semlio/pipeline/presets.hpp>
 #include <semlio/segment/scan_labels.hpp>
 #include <semlio/sim/simulator.hpp>
+#include <semlio_test/imu_inertial_drive.hpp>
 
 using namespace semlio;
 
@@ -30,15 +31,7 @@ namespace {
 constexpr std::size_t kFrames = 30;
 
 sim::SimulatorConfig drive_config(bool distortion) {
-  sim::SimulatorConfig c;
-  c.world = sim::WorldKind::kUrban;
-  c.traffic = sim::TrafficLevel::kNone;
-  c.frames = kFrames;
-  c.seed = 4;
-  c.distortion = distortion;
-  c.lidar.azimuth_steps = 720;  // small scans: a fast test
-  c.threads = 2;
-  return c;
+  return semlio_test::small_lidar_drive_config(kFrames, distortion);
 }
 
 // Exact IMU state (world frame) at time t.

@@ -5,15 +5,31 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <vector>
 
 #include <semlio/imu/imu_sample.hpp>
 #include <semlio/imu/nav_state.hpp>
 #include <semlio/lie/se3.hpp>
 #include <semlio/sim/imu.hpp>
+#include <semlio/sim/simulator.hpp>
 #include <semlio/sim/trajectory.hpp>
 
 namespace semlio_test {
+
+// A short lidar drive for the lidar-inertial pipeline tests: urban, no
+// traffic, 720 columns per sweep (small scans keep the tests fast).
+inline semlio::sim::SimulatorConfig small_lidar_drive_config(std::size_t frames, bool distortion) {
+  semlio::sim::SimulatorConfig c;
+  c.world = semlio::sim::WorldKind::kUrban;
+  c.traffic = semlio::sim::TrafficLevel::kNone;
+  c.frames = frames;
+  c.seed = 4;
+  c.distortion = distortion;
+  c.lidar.azimuth_steps = 720;
+  c.threads = 2;
+  return c;
+}
 
 // Starts at cruise speed, turns, climbs and brakes into a stop (~55 s).
 inline const semlio::sim::Trajectory& inertial_drive() {
