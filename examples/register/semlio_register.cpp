@@ -5,11 +5,14 @@
 //   semlio_register --source A --target B [--init x,y,z,roll,pitch,yaw]
 //                   [--associator nearest|normal] [--semantic on|off]
 //                   [--sensor hdl64e|hdl32e] [--kitti-correction on|off]
-//                   [--ring-check DEG]
+//                   [--ring-check DEG] [--robust-corners M]
 // Scans: KITTI .bin (labels from a .label of the same name in ../labels/ are
 // not read), .pcd or .ply. Angles in radians, except --ring-check: the
 // PointToLine ring-crossing check (point_to_line.hpp) in degrees, 0 = off
 // (default; 20 removes the corner bias measured on KITTI).
+// --robust-corners M: a Cauchy kernel of scale M metres on the corner
+// (point-to-line) terms, 0 = off (default; 0.1 also removes that bias, see
+// README "LOAM corners bias short motions").
 
 #include <CLI/CLI.hpp>
 
@@ -29,6 +32,7 @@
 #include <semlio/pipeline/registration.hpp>
 #include <semlio/residual/point_to_line.hpp>
 #include <semlio/residual/point_to_plane.hpp>
+#include <semlio/residual/robust.hpp>
 #include <semlio/residual/semantic_weighted.hpp>
 
 namespace {
@@ -71,6 +75,7 @@ int main(int argc, char** argv) {
   std::string sensor = "hdl64e";
   std::string correction = "off";
   double ring_check_deg = 0.0;
+  double robust_corners_m = 0.0;
   CLI::App app{"semlio_register: scan-to-scan registration with semlio's front end"};
   app.add_option("--source", source_path, "scan to move (.bin, .pcd, .ply)")->required();
   app.add_option("--target", target_path, "reference scan (.bin, .pcd, .ply)")->required();
@@ -83,6 +88,8 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"on", "off"}));
   app.add_option("--ring-check", ring_check_deg, "corner lines within this angle of the scan cone are dropped [deg], 0 = off")
       ->check(CLI::Range(0.0, 89.0));
+  app.add_option("--robust-corners", robust_corners_m, "Cauchy kernel scale on corner terms [m], 0 = off")
+      ->check(CLI::Range(0.0, 10.0));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -95,9 +102,13 @@ int main(int argc, char** argv) {
     semlio::RegistrationConfig config;
     config.sensor = sensor == "hdl32e" ? semlio::SensorModel::hdl32e() : semlio::SensorModel::hdl64e();
     config.kitti_vertical_correction = correction == "on";
-    const semlio::PointToLine line({.min_cone_angle_rad = ring_check_deg * std::numbers::pi / 180.0});
+    // One residual type either way (fewer instantiations): "off" is a Cauchy
+    // scale so large that its weight is exactly 1.
+    using Line = semlio::Robust<semlio::Cauchy, semlio::PointToLine>;
+    const Line line(semlio::Cauchy{.c_m = robust_corners_m > 0.0 ? robust_corners_m : 1e12},
+                    semlio::PointToLine({.min_cone_angle_rad = ring_check_deg * std::numbers::pi / 180.0}));
     const semlio::LoamResiduals plain{line, semlio::PointToPlane{}};
-    const semlio::LoamResiduals weighted{semlio::SemanticWeighted<semlio::PointToLine>(line),
+    const semlio::LoamResiduals weighted{semlio::SemanticWeighted<Line>(line),
                                          semlio::SemanticWeighted<semlio::PointToPlane>{}};
     semlio::RegistrationResult r;
     if (associator == "nearest") {
