@@ -44,7 +44,7 @@
 /// (~82nd percentile; ~75 000 surface points, ~5 100 after the 0.4 m voxel).
 ///
 /// Rings: scan.rings is required (infer them with rings.hpp). Points of a ring
-/// are taken in ascending azimuth (atan2(y, x) mod 2pi), sorted only when the
+/// are taken in ascending azimuth (atan2_fast(y, x) mod 2pi), sorted only when the
 /// stored order is not already so; direction does not matter to eq. 2.
 ///
 /// Allocation: the extractor keeps its buffers; after the first frames of a
@@ -61,6 +61,7 @@
 #include <vector>
 
 #include <semlio/core/error.hpp>
+#include <semlio/core/fast_math.hpp>
 #include <semlio/core/labels.hpp>
 #include <semlio/core/scan.hpp>
 #include <semlio/search/voxel_grid.hpp>
@@ -215,7 +216,7 @@ class LoamFeatureExtractor {
     azimuth_.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
       const Eigen::Vector3f& p = scan.points[i];
-      const double a = std::atan2(static_cast<double>(p.y()), static_cast<double>(p.x()));
+      const double a = atan2_fast(static_cast<double>(p.y()), static_cast<double>(p.x()));
       azimuth_[i] = static_cast<float>(a < 0.0 ? a + 2.0 * std::numbers::pi : a);
     }
     const auto by_azimuth = [this](std::uint32_t a, std::uint32_t b) {
@@ -229,49 +230,58 @@ class LoamFeatureExtractor {
     rejected_.assign(n, 0);
   }
 
-  /// Eq. 2, rejection and selection on the ring order_[b, e).
+  /// Eq. 2, rejection and selection on the ring order_[b, e). The ring's
+  /// points, azimuths, curvatures and flags are first gathered into
+  /// contiguous buffers (every pass below then runs without indirection) and
+  /// curvatures and flags are scattered back by scan index at the end.
   void process_ring(const Scan& scan, std::size_t b, std::size_t e, LoamFeatureReport& report,
                     LoamFeatures& out) {
     const std::size_t m = e - b;
     const auto h = static_cast<std::size_t>(config_.neighbours);
-    const auto at = [&](std::size_t k) -> const Eigen::Vector3f& { return scan.points[order_[b + k]]; };
+    ring_pts_.resize(m);
+    ring_az_.resize(m);
     range_.resize(m);
-    for (std::size_t k = 0; k < m; ++k) range_[k] = at(k).norm();
+    ring_c_.assign(m, -1.0F);
+    ring_rej_.assign(m, 0);
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::uint32_t i = order_[b + k];
+      ring_pts_[k] = scan.points[i];
+      ring_az_[k] = azimuth_[i];
+      range_[k] = ring_pts_[k].norm();
+    }
     const auto adjacent = [&](std::size_t k) {  // positions k and k+1
-      return static_cast<double>(azimuth_[order_[b + k + 1]] - azimuth_[order_[b + k]]) <=
-             config_.max_neighbour_gap_rad;
+      return static_cast<double>(ring_az_[k + 1] - ring_az_[k]) <= config_.max_neighbour_gap_rad;
     };
     // Eq. 2 with a sliding window: sum_{j in S} (p_i - p_j) = (2h + 1) p_i - W_i,
     // W_i = p_{i-h} + ... + p_{i+h} (double: the cancellation stays exact enough).
     Eigen::Vector3d window = Eigen::Vector3d::Zero();
-    for (std::size_t k = 0; k < 2 * h + 1; ++k) window += at(k).cast<double>();
+    for (std::size_t k = 0; k < 2 * h + 1; ++k) window += ring_pts_[k].cast<double>();
     const auto width = static_cast<double>(2 * h + 1);
     for (std::size_t k = h; k + h < m; ++k) {
-      if (k > h) window += at(k + h).cast<double>() - at(k - h - 1).cast<double>();
-      const Eigen::Vector3d pi = at(k).cast<double>();
+      if (k > h) window += ring_pts_[k + h].cast<double>() - ring_pts_[k - h - 1].cast<double>();
+      const Eigen::Vector3d pi = ring_pts_[k].cast<double>();
       const double norm = pi.norm();
       const double c = norm > 0.0 ? (width * pi - window).squaredNorm() / ((width - 1.0) * norm) : -1.0;
-      curvature_[order_[b + k]] = std::isfinite(c) ? static_cast<float>(c) : -1.0F;
+      ring_c_[k] = std::isfinite(c) ? static_cast<float>(c) : -1.0F;
       ++report.with_curvature;
     }
     // Occlusion and grazing beams (LOAM §V-A, LIO-SAM markOccludedPoints).
-    const auto reject = [&](std::size_t k) { rejected_[order_[b + k]] |= 1U; };
     const auto gap = static_cast<float>(config_.occlusion_depth_gap_m);
     for (std::size_t k = h; k + h < m; ++k) {
       if (k + 1 < m && adjacent(k)) {
         if (range_[k] - range_[k + 1] > gap) {
-          for (std::size_t j = 0; j <= h && j <= k; ++j) reject(k - j);
+          for (std::size_t j = 0; j <= h && j <= k; ++j) ring_rej_[k - j] |= 1U;
         } else if (range_[k + 1] - range_[k] > gap) {
-          for (std::size_t j = 1; j <= h + 1 && k + j < m; ++j) reject(k + j);
+          for (std::size_t j = 1; j <= h + 1 && k + j < m; ++j) ring_rej_[k + j] |= 1U;
         }
       }
       const float tol = static_cast<float>(config_.parallel_beam_ratio) * range_[k];
       if (std::abs(range_[k - 1] - range_[k]) > tol && std::abs(range_[k + 1] - range_[k]) > tol) {
-        rejected_[order_[b + k]] |= 2U;
+        ring_rej_[k] |= 2U;
       }
     }
     for (std::size_t k = 0; k < m; ++k) {
-      const std::uint8_t f = rejected_[order_[b + k]];
+      const std::uint8_t f = ring_rej_[k];
       if ((f & 1U) != 0) ++report.occluded;
       if ((f & 1U) == 0 && (f & 2U) != 0) ++report.parallel;
     }
@@ -279,6 +289,8 @@ class LoamFeatureExtractor {
     picked_.assign(m, 0);
     const std::size_t valid = m - 2 * h;
     const auto sectors = static_cast<std::size_t>(config_.sectors);
+    const auto corner_threshold = config_.corner_threshold_m;
+    const auto surface_threshold = config_.surface_threshold_m;
     for (std::size_t s = 0; s < sectors; ++s) {
       const std::size_t sp = h + valid * s / sectors;
       const std::size_t ep = h + valid * (s + 1) / sectors;
@@ -286,32 +298,33 @@ class LoamFeatureExtractor {
       // Only corner candidates are sorted (about a tenth of the points).
       sector_.clear();
       for (std::size_t k = sp; k < ep; ++k) {
-        if (static_cast<double>(curvature_[order_[b + k]]) > config_.corner_threshold_m) {
-          sector_.push_back(static_cast<std::uint32_t>(k));
-        }
+        if (static_cast<double>(ring_c_[k]) > corner_threshold) sector_.push_back(static_cast<std::uint32_t>(k));
       }
       std::sort(sector_.begin(), sector_.end(), [&](std::uint32_t x, std::uint32_t y) {
-        const float cx = curvature_[order_[b + x]];
-        const float cy = curvature_[order_[b + y]];
+        const float cx = ring_c_[x];
+        const float cy = ring_c_[y];
         return cx > cy || (cx == cy && x < y);
       });
       std::size_t taken = 0;
       for (const std::uint32_t k : sector_) {
-        const std::uint32_t i = order_[b + k];
         if (taken >= config_.max_corners_per_sector) break;
-        if (picked_[k] != 0 || rejected_[i] != 0) continue;
-        out.corners.indices.push_back(i);
+        if (picked_[k] != 0 || ring_rej_[k] != 0) continue;
+        out.corners.indices.push_back(order_[b + k]);
         ++taken;
         picked_[k] = 1;
         for (std::size_t j = 1; j <= h && k + j < m && adjacent(k + j - 1); ++j) picked_[k + j] = 1;
         for (std::size_t j = 1; j <= h && j <= k && adjacent(k - j); ++j) picked_[k - j] = 1;
       }
       for (std::size_t k = sp; k < ep; ++k) {
-        const std::uint32_t i = order_[b + k];
-        if (picked_[k] != 0 || rejected_[i] != 0) continue;
-        const float c = curvature_[i];
-        if (c >= 0.0F && static_cast<double>(c) < config_.surface_threshold_m) surface_idx_.push_back(i);
+        if (picked_[k] != 0 || ring_rej_[k] != 0) continue;
+        const float c = ring_c_[k];
+        if (c >= 0.0F && static_cast<double>(c) < surface_threshold) surface_idx_.push_back(order_[b + k]);
       }
+    }
+    for (std::size_t k = 0; k < m; ++k) {
+      const std::uint32_t i = order_[b + k];
+      curvature_[i] = ring_c_[k];
+      rejected_[i] = ring_rej_[k];
     }
   }
 
@@ -324,6 +337,10 @@ class LoamFeatureExtractor {
   std::vector<std::size_t> ring_begin_;
   std::vector<std::size_t> cursor_;
   std::vector<float> range_;
+  std::vector<Eigen::Vector3f> ring_pts_;  // one ring's points in azimuth order
+  std::vector<float> ring_az_;             // their azimuths
+  std::vector<float> ring_c_;              // their curvatures (-1: undefined)
+  std::vector<std::uint8_t> ring_rej_;     // their rejection flags (1 occluded, 2 grazing)
   std::vector<std::uint8_t> picked_;
   std::vector<std::uint32_t> sector_;
   std::vector<std::uint32_t> surface_idx_;

@@ -45,6 +45,7 @@
 #include <vector>
 
 #include <semlio/core/error.hpp>
+#include <semlio/core/fast_math.hpp>
 #include <semlio/core/scan.hpp>
 #include <semlio/features/sensor_model.hpp>
 
@@ -86,9 +87,9 @@ inline constexpr double kKittiVerticalCorrectionRad = 0.205 * std::numbers::pi /
 
 namespace detail {
 
-/// Azimuth in [0, 2pi).
+/// Azimuth in [0, 2pi) (atan2_fast: per-point work, see core/fast_math.hpp).
 inline double azimuth_0_2pi(const Eigen::Vector3f& p) {
-  const double a = std::atan2(static_cast<double>(p.y()), static_cast<double>(p.x()));
+  const double a = atan2_fast(static_cast<double>(p.y()), static_cast<double>(p.x()));
   return a < 0.0 ? a + 2.0 * std::numbers::pi : a;
 }
 
@@ -159,8 +160,10 @@ inline RingReport infer_rings(Scan& scan, const SensorModel& sensor, const RingC
   }
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const Eigen::Vector3f& p = scan.points[i];
-    const double h = std::hypot(static_cast<double>(p.x()), static_cast<double>(p.y()));
-    scan.rings[i] = sensor.nearest_ring(std::atan2(static_cast<double>(p.z()), h));
+    // Float coordinates square exactly in double: no hypot needed.
+    const double x = p.x();
+    const double y = p.y();
+    scan.rings[i] = sensor.nearest_ring(atan2_fast(static_cast<double>(p.z()), std::sqrt(x * x + y * y)));
   }
   report.used = RingMethod::kElevation;
   return report;
@@ -188,7 +191,7 @@ inline void assign_times_from_azimuth(Scan& scan, const PointTimeConfig& config 
   scan.times_s.resize(scan.size());
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const Eigen::Vector3f& p = scan.points[i];
-    double turned = std::atan2(static_cast<double>(p.y()), static_cast<double>(p.x())) -
+    double turned = atan2_fast(static_cast<double>(p.y()), static_cast<double>(p.x())) -
                     config.start_azimuth_rad;
     if (!config.counter_clockwise) turned = -turned;
     double frac = turned / kTwoPi;
@@ -199,22 +202,31 @@ inline void assign_times_from_azimuth(Scan& scan, const PointTimeConfig& config 
 }
 
 /// Rotates point p about the horizontal axis perpendicular to its azimuth,
-/// (y, -x, 0) / ||(x, y)||, by angle_rad: its elevation grows by angle_rad while
-/// range and azimuth stay. Points on the z axis are returned unchanged.
-inline Eigen::Vector3f correct_vertical_angle(const Eigen::Vector3f& p, double angle_rad) {
+/// (y, -x, 0) / ||(x, y)||, by the angle whose cosine and sine are given: its
+/// elevation grows by that angle while range and azimuth stay. Points on the
+/// z axis are returned unchanged. (Per-point form: the caller evaluates the
+/// trigonometry once per scan.)
+inline Eigen::Vector3f correct_vertical_angle(const Eigen::Vector3f& p, double cos_angle, double sin_angle) {
   const Eigen::Vector3d q = p.cast<double>();
-  const double h = std::hypot(q.x(), q.y());
+  const double h = std::sqrt(q.x() * q.x() + q.y() * q.y());  // float inputs: exact squares, no hypot needed
   if (!(h > 0.0)) return p;
   // Rodrigues with axis a = (y, -x, 0)/h, a.p = 0: p' = p cos + (a x p) sin,
   // a x p = (-x z / h, -y z / h, h).
   const Eigen::Vector3d axp(-q.x() * q.z() / h, -q.y() * q.z() / h, h);
-  return (q * std::cos(angle_rad) + axp * std::sin(angle_rad)).cast<float>();
+  return (q * cos_angle + axp * sin_angle).cast<float>();
+}
+
+/// As above for an angle in radians.
+inline Eigen::Vector3f correct_vertical_angle(const Eigen::Vector3f& p, double angle_rad) {
+  return correct_vertical_angle(p, std::cos(angle_rad), std::sin(angle_rad));
 }
 
 /// KITTI's intrinsic fix (METHOD.md): raises every point's elevation by
 /// angle_rad (default 0.205 deg as KISS-ICP and CT-ICP; IMLS-SLAM uses 0.195).
 inline void correct_kitti_vertical_angle(Scan& scan, double angle_rad = kKittiVerticalCorrectionRad) {
-  for (Eigen::Vector3f& p : scan.points) p = correct_vertical_angle(p, angle_rad);
+  const double c = std::cos(angle_rad);
+  const double s = std::sin(angle_rad);
+  for (Eigen::Vector3f& p : scan.points) p = correct_vertical_angle(p, c, s);
 }
 
 }  // namespace semlio

@@ -176,7 +176,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     if (!scan.empty()) {
       infer_rings(scan, config_.sensor, config_.rings, ring_starts_);
       if (config_.kitti_vertical_correction) {
-        for (auto& p : scan.points) p = correct_vertical_angle(p, kKittiVerticalCorrectionRad);
+        correct_kitti_vertical_angle(scan, kKittiVerticalCorrectionRad);
       }
     }
     report.timings.preprocess_ms = ms_since(t);
