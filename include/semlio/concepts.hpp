@@ -81,6 +81,41 @@ concept Residual = requires(const R r, const FeaturePoint& feature, const Matche
   { r.evaluate(feature, matches, T_map_scan) } -> std::same_as<ResidualTerm<R::kDim>>;
 };
 
+/// A Residual whose per-match-set work (fitting the line or plane through the
+/// matches) can be done once and reused while the matches stay the same --
+/// as they do over most late Gauss-Newton iterations. `prepare(matches)`
+/// returns that fit (`Model`); `evaluate(feature, matches, model, T)` must
+/// equal `evaluate(feature, matches, T)` bit for bit when `model` came from
+/// `prepare(matches)` (the plain evaluate is defined as the two in a row).
+template <typename R>
+concept PreparedResidual =
+    Residual<R> && requires(const R r, const FeaturePoint& feature, const MatchedPoints& matches,
+                            const typename R::Model& model, const SE3d& T_map_scan) {
+      { r.prepare(matches) } -> std::same_as<typename R::Model>;
+      { r.evaluate(feature, matches, model, T_map_scan) } -> std::same_as<ResidualTerm<R::kDim>>;
+    };
+
+namespace detail {
+
+/// Stand-in Model of a residual that has no separate fit.
+struct NoModel {};
+
+template <typename R>
+struct ModelOfImpl {
+  using type = NoModel;
+};
+template <typename R>
+  requires requires { typename R::Model; }
+struct ModelOfImpl<R> {
+  using type = typename R::Model;
+};
+
+/// R::Model when R declares one, else NoModel (for decorators).
+template <typename R>
+using ModelOf = typename ModelOfImpl<R>::type;
+
+}  // namespace detail
+
 /// Labels a scan in place: afterwards `labels.size() == points.size()`.
 /// In place (not Scan -> Scan) so the per-frame pipeline allocates nothing.
 template <typename S>

@@ -15,9 +15,12 @@
 #include <cstddef>
 #include <vector>
 
+#include <semlio/associate/nearest_k.hpp>
 #include <semlio/core/error.hpp>
 #include <semlio/map/feature_map.hpp>
+#include <semlio/map/feature_terms.hpp>
 #include <semlio/map/local_map.hpp>
+#include <semlio/residual/semantic_weighted.hpp>
 #include <semlio_test/associate_scenes.hpp>
 
 using semlio::Class;
@@ -342,4 +345,45 @@ TEST_CASE("LocalMap rejects bad settings and inputs", "[map]") {
   FeatureCloud bad = plane_patch(Class::kRoad);
   bad.labels.pop_back();
   CHECK_THROWS_AS(map.add_keyframe(SE3d(), FeatureCloud{}, bad), semlio::ValueError);
+}
+
+TEST_CASE("Residual fits reused across iterations give the very same normal equations", "[map][residual]") {
+  // Real KITTI pair: scan 000001's surfaces and corners against the map of
+  // 000000, re-associated along converging poses (as Gauss-Newton does). The
+  // cached path must add exactly the terms the plain path adds, and must
+  // actually reuse fits once the matches settle. The same cache then serves
+  // the corner map (another build): a stale fit would break the equality.
+  const auto query = semlio_test::kitti_features("kitti/sequences/00/velodyne/000001.bin");
+  LocalMap local;
+  semlio_test::build_kitti_pair_map(local);
+  const SE3d goal = semlio_test::kitti_T_0_1();
+  const SE3d start = goal * SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.12, -0.05, 0.02, 0.0, 0.0, 0.01).finished());
+  const Eigen::Matrix<double, 6, 1> xi = (start.inverse() * goal).log();
+
+  semlio::NearestK nearest;
+  const semlio::SemanticWeighted<semlio::PointToPlane> plane;
+  semlio::ResidualFitCache<semlio::PointToPlane::Model> cache;
+  for (const auto* features : {&query.surfaces, &query.corners}) {
+    nearest.set_map(features == &query.surfaces ? local.surfaces() : local.corners());
+    nearest.set_scan(features->points);
+    semlio::FeatureSet set;
+    set.points = features->points;
+    set.labels = features->labels;
+    const semlio::FeatureMap& map = features == &query.surfaces ? local.surfaces() : local.corners();
+    semlio::Correspondences matches;
+    for (int k = 0; k <= 8; ++k) {
+      const SE3d T = start * SE3d::exp((1.0 - std::pow(0.5, k)) * xi);
+      nearest.associate(T, matches);
+      semlio::NormalEquations plain;
+      semlio::NormalEquations cached;
+      semlio::accumulate_feature_terms(set, matches, map, plane, T, plain);
+      semlio::accumulate_feature_terms(set, matches, map, plane, T, cached, cache);
+      INFO("iteration " << k);
+      CHECK(plain.H == cached.H);
+      CHECK(plain.b == cached.b);
+      CHECK(plain.cost == cached.cost);
+      if (features == &query.surfaces) CHECK(plain.num_residuals > 1000);
+    }
+  }
+  CHECK(cache.hits() > query.surfaces.points.size());  // later iterations reused most fits
 }

@@ -40,9 +40,12 @@
 /// where it was last filled, and the distance R0 to the L-th. At a new
 /// position q (moved by d = |q - q0|) every map point within R0 - d of q is in
 /// that list (triangle inequality), so the same exactness test as above
-/// applies with q0 as the anchor: when it holds, the answer costs L distance
-/// evaluations and no tree search; otherwise the slot is refilled by one
-/// L-NN query at q, whose first k entries are the exact answer.
+/// applies with q0 as the anchor: when it holds, the answer costs at most L
+/// distance evaluations and no tree search (fewer: the list keeps each
+/// entry's distance from q0, and the scan stops at the first entry that
+/// cannot come nearer than the k-th found -- again the triangle
+/// inequality); otherwise the slot is refilled by one L-NN query at q, whose
+/// first k entries are the exact answer.
 
 #include <Eigen/Core>
 
@@ -183,6 +186,7 @@ class NearestCache {
     radius_m_.assign(slots, -1.0F);
     count_.resize(slots);
     lists_.resize(slots * list_len_);
+    list_dist_m_.resize(slots * list_len_);
     generation_ = 0;
     hits_ = 0;
     refills_ = 0;
@@ -206,6 +210,7 @@ class NearestCache {
   std::vector<float> radius_m_;           // distance to its last list entry (inf: whole map; < 0: empty)
   std::vector<std::uint8_t> count_;       // entries in the list
   std::vector<std::uint32_t> lists_;      // list_len_ map indices per slot, (distance, index) order at q0
+  std::vector<float> list_dist_m_;        // their distances from q0 [m] (ascending): early exit of a hit
   std::uint64_t generation_ = 0;          // FeatureMap build id the lists refer to (0: none)
   std::size_t hits_ = 0;
   std::size_t refills_ = 0;
@@ -311,16 +316,26 @@ class FeatureMap {
     if (radius_f >= 0.0F) {
       const std::vector<Eigen::Vector3f>& pts = tree_.points();
       const std::size_t stored = cache.count_[slot];
+      const float* dist0 = cache.list_dist_m_.data() + slot * len;
+      const auto radius = static_cast<double>(radius_f);
+      const double moved = std::sqrt(static_cast<double>(detail::nanoflann_sq_distance(q, cache.q0_[slot])));
+      const double margin = 1e-4 + 1e-6 * (std::isfinite(radius) ? radius : 0.0);
       std::size_t count = 0;
       for (std::size_t j = 0; j < stored; ++j) {
+        // The list ascends in distance from q0, so entry j and every later one
+        // lie at least dist0[j] - moved from q (triangle inequality): once that
+        // exceeds the k-th distance found (or the gate) by the rounding
+        // margin, none of them can enter the answer.
+        const double lower = static_cast<double>(dist0[j]) - moved - margin;
+        if (lower > 0.0 &&
+            lower * lower > (count == k ? static_cast<double>(sq_dist[k - 1]) : max_sq_dist_m2)) {
+          break;
+        }
         const float d = detail::nanoflann_sq_distance(q, pts[list[j]]);
         if (static_cast<double>(d) <= max_sq_dist_m2) count = detail::insert_by_distance_index(d, list[j], idx, sq_dist, count, k);
       }
-      const auto radius = static_cast<double>(radius_f);
-      const double moved = std::sqrt(static_cast<double>(detail::nanoflann_sq_distance(q, cache.q0_[slot])));
       const double reach = radius - moved;
       const double needed = count == k ? std::sqrt(static_cast<double>(sq_dist[k - 1])) : std::sqrt(max_sq_dist_m2);
-      const double margin = 1e-4 + 1e-6 * (std::isfinite(radius) ? radius : 0.0);
       if (needed + margin < reach) {
         ++cache.hits_;
         return count;
@@ -338,6 +353,8 @@ class FeatureMap {
     const std::size_t found = tree_.knn(q, len, list, d2.data(), bound2);
     cache.q0_[slot] = q;
     cache.count_[slot] = static_cast<std::uint8_t>(found);
+    float* dist0 = cache.list_dist_m_.data() + slot * len;
+    for (std::size_t j = 0; j < found; ++j) dist0[j] = std::sqrt(d2[j]);
     cache.radius_m_[slot] = found == len ? std::sqrt(d2[len - 1])
                                          : std::sqrt(bound2);  // inf when unbounded (then found = size())
     std::size_t n = std::min(found, k);
@@ -398,6 +415,10 @@ class FeatureMap {
   [[nodiscard]] int shape_neighbours() const noexcept { return shape_neighbours_; }
   /// The search structure over points().
   [[nodiscard]] const KdTree3f& tree() const noexcept { return tree_; }
+  /// Unique id of the last build() (0: never built): a rebuilt map -- even at
+  /// the same address -- has a new one, so caches keyed on point indices can
+  /// tell when they went stale.
+  [[nodiscard]] std::uint64_t build_id() const noexcept { return generation_; }
   /// Length of each point's candidate list (0 = lists off).
   [[nodiscard]] std::size_t candidate_list() const noexcept { return list_len_; }
 

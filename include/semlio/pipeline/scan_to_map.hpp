@@ -88,9 +88,12 @@ class ScanToMapProblem {
   }
 
   /// Adds every valid residual at T_map_scan to eq (eq. 13, squared).
+  /// Residuals that can (PreparedResidual) reuse their line / plane fits for
+  /// features whose matches did not change since the last call: the same
+  /// terms, bit for bit. Not safe to call concurrently on one problem.
   void linearize(const SE3d& T_map_scan, NormalEquations& eq) const {
-    accumulate_feature_terms(*corners_, corner_matches_, *corner_map_, residuals_.corner, T_map_scan, eq);
-    accumulate_feature_terms(*surfaces_, surface_matches_, *surface_map_, residuals_.surface, T_map_scan, eq);
+    accumulate(*corners_, corner_matches_, *corner_map_, residuals_.corner, corner_fits_, T_map_scan, eq);
+    accumulate(*surfaces_, surface_matches_, *surface_map_, residuals_.surface, surface_fits_, T_map_scan, eq);
   }
 
   /// Correspondences of the last association, per corner feature.
@@ -110,6 +113,16 @@ class ScanToMapProblem {
   }
 
  private:
+  template <typename R, typename Cache>
+  static void accumulate(const FeatureCloud& features, const Correspondences& matches, const FeatureMap& map,
+                         const R& residual, Cache& cache, const SE3d& T_map_scan, NormalEquations& eq) {
+    if constexpr (PreparedResidual<R>) {
+      accumulate_feature_terms(features, matches, map, residual, T_map_scan, eq, cache);
+    } else {
+      accumulate_feature_terms(features, matches, map, residual, T_map_scan, eq);
+    }
+  }
+
   static std::size_t count_matched(const Correspondences& c) noexcept {
     std::size_t n = 0;
     for (const auto& m : c) n += m.count > 0 ? 1U : 0U;
@@ -127,6 +140,9 @@ class ScanToMapProblem {
   Correspondences surface_matches_;
   NearestCache corner_cache_;   // per-feature candidate lists across iterations (and frames)
   NearestCache surface_cache_;
+  // Per-feature residual fits reused while matches stay (PreparedResidual only).
+  mutable ResidualFitCache<detail::ModelOf<CornerResidual>> corner_fits_;
+  mutable ResidualFitCache<detail::ModelOf<SurfaceResidual>> surface_fits_;
 };
 
 }  // namespace semlio

@@ -47,17 +47,37 @@ class PointToPlane {
   /// With the given settings.
   explicit PointToPlane(const Config& config = {}) : config_(config) {}
 
+  /// The plane of one match set (PreparedResidual): reusable at any pose
+  /// while the matches stay the same.
+  struct Model {
+    Eigen::Vector3d n = Eigen::Vector3d::UnitZ();  ///< unit normal
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();   ///< point on the plane [m, map frame]
+    bool valid = false;                            ///< false: the checks failed, no residual
+  };
+
+  /// The plane through the matches (the checks of the file comment).
+  [[nodiscard]] Model prepare(const MatchedPoints& matches) const {
+    Model model;
+    model.valid = plane(matches, model.n, model.c);
+    return model;
+  }
+
   /// r = n . (T p_scan - c); J = n^T [R, -R hat(p_scan)] (right perturbation).
   [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& matches,
                                             const SE3d& T_map_scan) const {
+    return evaluate(feature, matches, prepare(matches), T_map_scan);
+  }
+
+  /// As evaluate(feature, matches, T_map_scan) with the plane already fitted
+  /// (model = prepare(matches)).
+  [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& /*matches*/,
+                                            const Model& model, const SE3d& T_map_scan) const {
     ResidualTerm<kDim> term;
-    Eigen::Vector3d n;
-    Eigen::Vector3d c;
-    if (!plane(matches, n, c)) return term;
+    if (!model.valid) return term;
     const Eigen::Matrix3d R = T_map_scan.rotation();
     const Eigen::Vector3d p_map = R * feature.p_scan + T_map_scan.translation();
-    term.r(0) = n.dot(p_map - c);
-    term.J_r_xi = n.transpose() * detail::moved_point_jacobian(R, feature.p_scan);
+    term.r(0) = model.n.dot(p_map - model.c);
+    term.J_r_xi = model.n.transpose() * detail::moved_point_jacobian(R, feature.p_scan);
     term.valid = term.r.allFinite() && term.J_r_xi.allFinite();
     if (!term.valid) term = ResidualTerm<kDim>{};
     return term;
@@ -104,6 +124,6 @@ class PointToPlane {
   Config config_;
 };
 
-static_assert(Residual<PointToPlane>);
+static_assert(PreparedResidual<PointToPlane>);
 
 }  // namespace semlio

@@ -51,12 +51,28 @@ class Robust {
   /// Wraps inner with kernel.
   explicit Robust(Kernel kernel = Kernel{}, R inner = R{}) : kernel_(kernel), inner_(inner) {}
 
+  /// R's fit of a match set (an empty type when R has none).
+  using Model = detail::ModelOf<R>;
+
   /// inner's term with weight <- weight * rho'(||r||^2).
   [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& matches,
                                             const SE3d& T_map_scan) const {
-    ResidualTerm<kDim> term = inner_.evaluate(feature, matches, T_map_scan);
-    if (term.valid) term.weight *= kernel_.weight(term.r.squaredNorm());
-    return term;
+    return reweighted(inner_.evaluate(feature, matches, T_map_scan));
+  }
+
+  /// inner's fit of the matches (when R is a PreparedResidual).
+  [[nodiscard]] Model prepare(const MatchedPoints& matches) const
+    requires PreparedResidual<R>
+  {
+    return inner_.prepare(matches);
+  }
+
+  /// As evaluate(feature, matches, T_map_scan) with model = prepare(matches).
+  [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& matches,
+                                            const Model& model, const SE3d& T_map_scan) const
+    requires PreparedResidual<R>
+  {
+    return reweighted(inner_.evaluate(feature, matches, model, T_map_scan));
   }
 
   /// The kernel.
@@ -65,11 +81,17 @@ class Robust {
   [[nodiscard]] const R& inner() const noexcept { return inner_; }
 
  private:
+  ResidualTerm<kDim> reweighted(ResidualTerm<kDim> term) const {
+    if (term.valid) term.weight *= kernel_.weight(term.r.squaredNorm());
+    return term;
+  }
+
   Kernel kernel_;
   R inner_;
 };
 
 static_assert(Residual<Robust<Huber, PointToPlane>>);
 static_assert(Residual<Robust<Cauchy, PointToLine>>);
+static_assert(PreparedResidual<Robust<Huber, PointToPlane>>);
 
 }  // namespace semlio

@@ -28,10 +28,13 @@ inline double semantic_weight(Class label, const MatchedPoints& matches) {
 
 /// Residual R with r and J multiplied by the semantic weight (eq. 11-12).
 /// A term with weight 0 stays valid (it is a residual that counts for nothing).
+/// A PreparedResidual when R is one (the weight needs only the labels).
 template <Residual R>
 class SemanticWeighted {
  public:
   static constexpr int kDim = R::kDim;
+  /// R's fit of a match set (an empty type when R has none).
+  using Model = detail::ModelOf<R>;
 
   /// Wraps inner.
   explicit SemanticWeighted(R inner = R{}) : inner_(inner) {}
@@ -39,7 +42,30 @@ class SemanticWeighted {
   /// inner's term with r <- w r and J <- w J.
   [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& matches,
                                             const SE3d& T_map_scan) const {
-    ResidualTerm<kDim> term = inner_.evaluate(feature, matches, T_map_scan);
+    return weighted(feature, matches, inner_.evaluate(feature, matches, T_map_scan));
+  }
+
+  /// inner's fit of the matches.
+  [[nodiscard]] Model prepare(const MatchedPoints& matches) const
+    requires PreparedResidual<R>
+  {
+    return inner_.prepare(matches);
+  }
+
+  /// As evaluate(feature, matches, T_map_scan) with model = prepare(matches).
+  [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& matches,
+                                            const Model& model, const SE3d& T_map_scan) const
+    requires PreparedResidual<R>
+  {
+    return weighted(feature, matches, inner_.evaluate(feature, matches, model, T_map_scan));
+  }
+
+  /// The wrapped residual.
+  [[nodiscard]] const R& inner() const noexcept { return inner_; }
+
+ private:
+  static ResidualTerm<kDim> weighted(const FeaturePoint& feature, const MatchedPoints& matches,
+                                     ResidualTerm<kDim> term) {
     if (!term.valid) return term;
     const double w = semantic_weight(feature.label, matches);
     term.r *= w;
@@ -47,14 +73,11 @@ class SemanticWeighted {
     return term;
   }
 
-  /// The wrapped residual.
-  [[nodiscard]] const R& inner() const noexcept { return inner_; }
-
- private:
   R inner_;
 };
 
 static_assert(Residual<SemanticWeighted<PointToPlane>>);
 static_assert(Residual<SemanticWeighted<PointToLine>>);
+static_assert(PreparedResidual<SemanticWeighted<PointToPlane>>);
 
 }  // namespace semlio
