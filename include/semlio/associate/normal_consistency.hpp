@@ -137,7 +137,9 @@ class NormalConsistency {
   void compute_scan_axes() {
     axes_kind_ = map_ != nullptr ? map_->kind() : FeatureKind::kPlane;
     scan_axes_.resize(features_->size());
-    for (std::size_t i = 0; i < features_->size(); ++i) {
+    // In the tree's leaf order (each axis is independent of the others): the
+    // same results, fewer cache misses than feature order.
+    for (const std::uint32_t i : scan_tree_.leaf_order()) {
       scan_axes_[i] =
           detail::neighbourhood_axis(scan_tree_, axes_kind_, (*features_)[i], config_.scan_neighbours);
     }

@@ -90,10 +90,10 @@ class VoxelGrid {
   }
 
  private:
-  static constexpr std::uint32_t kEmpty = 0xFFFFFFFFU;
   struct Slot {
     std::uint64_t key;
     std::uint32_t cell;
+    std::uint32_t stamp;  // call that filled it: older stamps read as empty
   };
   struct Cell {
     Eigen::Vector3d sum;
@@ -101,12 +101,16 @@ class VoxelGrid {
     std::uint32_t first;
   };
 
-  /// Sizes the hash table for n points and forgets the previous call.
+  /// Sizes the hash table for n points and forgets the previous call: by a
+  /// new stamp rather than by clearing (a scan's table is megabytes).
   void begin(std::size_t n) {
     std::size_t cap = 16;
     while (cap < 2 * n) cap *= 2;
-    table_.assign(cap, Slot{0, kEmpty});
-    mask_ = cap - 1;
+    if (table_.size() < cap || ++stamp_ == 0) {  // a larger table from an earlier call serves as well
+      table_.assign(std::max(cap, table_.size()), Slot{0, 0, 0});
+      stamp_ = 1;
+    }
+    mask_ = table_.size() - 1;
     cells_.clear();
     entry_idx_.clear();
     entry_cell_.clear();
@@ -118,11 +122,11 @@ class VoxelGrid {
     if (!p.allFinite()) return;
     const std::uint64_t key = voxel_key(p, 1.0 / config_.leaf_size_m);
     std::size_t slot = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ULL) >> 32U) & mask_;
-    while (table_[slot].cell != kEmpty && table_[slot].key != key) slot = (slot + 1) & mask_;
+    while (table_[slot].stamp == stamp_ && table_[slot].key != key) slot = (slot + 1) & mask_;
     std::uint32_t cell = table_[slot].cell;
-    if (cell == kEmpty) {
+    if (table_[slot].stamp != stamp_) {
       cell = static_cast<std::uint32_t>(cells_.size());
-      table_[slot] = Slot{key, cell};
+      table_[slot] = Slot{key, cell, stamp_};
       cells_.push_back(Cell{p.cast<double>(), 1, i});
     } else {
       Cell& c = cells_[cell];
@@ -180,6 +184,7 @@ class VoxelGrid {
 
   Config config_;
   std::vector<Slot> table_;
+  std::uint32_t stamp_ = 0;
   std::size_t mask_ = 0;
   std::vector<Cell> cells_;
   std::vector<std::uint32_t> entry_idx_;
