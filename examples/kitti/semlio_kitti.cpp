@@ -122,6 +122,21 @@ struct RunResult {
   std::size_t graph_nodes = 0;
   std::size_t graph_factors = 0;
   std::size_t keyframe_bytes = 0;
+  std::size_t place_bytes = 0;        // data of the retired keyframes kept as places
+  std::size_t places = 0;
+  std::size_t archived = 0;           // retired keyframes whose data was dropped
+  double place_spacing_m = 0.0;       // final place spacing (grows with each thinning)
+  std::size_t place_thinnings = 0;
+  long peak_rss_before_map_kb = 0;    // VmHWM before the semantic map was built
+  std::size_t map_build_bytes = 0;    // SemanticMap while building
+  // Every kMemoryTraceEvery frames and at the end: frame, keyframe store, resident set.
+  struct MemorySample {
+    std::size_t frame = 0;
+    std::size_t store_bytes = 0;
+    std::size_t place_bytes = 0;
+    long rss_kb = 0;
+  };
+  std::vector<MemorySample> memory_trace;
   semlio::Scan map;
   ImuRunFacts imu;
 };
@@ -134,12 +149,13 @@ double thread_cpu_ms() {
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
 }
 
-// Peak resident set size [kB] from /proc/self/status (VmHWM); 0 when unknown.
-long peak_rss_kb() {
+// Peak (VmHWM) or current (VmRSS) resident set size [kB] from
+// /proc/self/status; 0 when unknown.
+long status_kb(const char* field) {
   std::ifstream status("/proc/self/status");
   std::string key;
   while (status >> key) {
-    if (key == "VmHWM:") {
+    if (key == field) {
       long kb = 0;
       status >> kb;
       return kb;
@@ -148,6 +164,9 @@ long peak_rss_kb() {
   }
   return 0;
 }
+long peak_rss_kb() { return status_kb("VmHWM:"); }
+long rss_kb() { return status_kb("VmRSS:"); }
+constexpr std::size_t kMemoryTraceEvery = 250;
 
 // Terminal progress line (frame i/N, Hz, ETA), refreshed every 5 frames.
 void show_progress(std::size_t done, std::size_t n, std::chrono::steady_clock::time_point start) {
@@ -186,7 +205,11 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
     const semlio::SlamFrameReport r = slam.process(scan);
     result.reports.push_back(r.odometry);
     result.back_end.push_back({r.loop_checked, r.loop_closed, r.backend_ms, r.total_ms, thread_cpu_ms() - cpu_start_ms});
-    if (tty) show_progress(i - first + 1, n, start);
+    const std::size_t done = i - first + 1;
+    if (done % kMemoryTraceEvery == 0 || i == last) {
+      result.memory_trace.push_back({done, slam.keyframe_bytes(), slam.place_bytes(), rss_kb()});
+    }
+    if (tty) show_progress(done, n, start);
   }
   if (tty) std::fprintf(stderr, "\n");
   result.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -200,7 +223,18 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
   result.graph_nodes = slam.graph().num_nodes();
   result.graph_factors = slam.graph().num_factors();
   result.keyframe_bytes = slam.keyframe_bytes();
-  if (write_map) result.map = slam.semantic_map(be.map);
+  result.place_bytes = slam.place_bytes();
+  result.places = slam.places().size();
+  result.archived = slam.archived_count();
+  result.place_spacing_m = slam.place_spacing_m();
+  result.place_thinnings = slam.place_thinnings();
+  result.peak_rss_before_map_kb = peak_rss_kb();
+  if (write_map) {
+    semlio::SemanticMap map(be.map);
+    slam.build_semantic_map(map);
+    result.map_build_bytes = map.memory_bytes();
+    result.map = map.cloud();
+  }
   return result;
 }
 
@@ -570,6 +604,23 @@ int main(int argc, char** argv) {
       j.field("keyframe_store_mb", static_cast<double>(result.keyframe_bytes) / (1024.0 * 1024.0));
       j.field("keyframe_store_bytes_per_keyframe",
               keyframes.empty() ? 0.0 : static_cast<double>(result.keyframe_bytes) / static_cast<double>(keyframes.size()));
+      constexpr double kMiB = 1024.0 * 1024.0;
+      const semlio::SlamConfig& sc = back_end.slam;
+      j.field("recent_keyframes", sc.max_keyframe_clouds);
+      j.field("place_store_mb", static_cast<double>(result.place_bytes) / kMiB);
+      j.field("place_ceiling_mb", static_cast<double>(sc.max_keyframe_clouds == 0 ? 0 : sc.max_place_bytes) / kMiB);
+      j.field("places", result.places).field("archived_keyframes", result.archived);
+      j.field("place_spacing_m", result.place_spacing_m).field("place_thinnings", result.place_thinnings);
+      j.field("peak_rss_before_map_mb", static_cast<double>(result.peak_rss_before_map_kb) / 1024.0);
+      j.field("map_build_mb", static_cast<double>(result.map_build_bytes) / kMiB);
+      j.key("trace").begin_array();
+      for (const RunResult::MemorySample& m : result.memory_trace) {
+        j.begin_object();
+        j.field("frames", m.frame).field("keyframe_store_mb", static_cast<double>(m.store_bytes) / kMiB);
+        j.field("place_store_mb", static_cast<double>(m.place_bytes) / kMiB);
+        j.field("rss_mb", static_cast<double>(m.rss_kb) / 1024.0).end_object();
+      }
+      j.end_array();
       j.end_object();
       if (use_imu) {
         const ImuRunFacts& f = result.imu;
@@ -635,8 +686,12 @@ int main(int argc, char** argv) {
                   f.fallbacks, f.rejected);
       if (!f.last_issue.empty()) std::printf("  last IMU issue      %s\n", f.last_issue.c_str());
     }
-    std::printf("  memory              peak RSS %.0f MB, keyframe store %.1f MB\n", static_cast<double>(peak_kb) / 1024.0,
-                static_cast<double>(result.keyframe_bytes) / (1024.0 * 1024.0));
+    std::printf("  memory              peak RSS %.0f MB (%.0f MB before the map), keyframe store %.1f MB "
+                "(places %.1f MB: %zu places at %.1f m, %zu archived)\n",
+                static_cast<double>(peak_kb) / 1024.0, static_cast<double>(result.peak_rss_before_map_kb) / 1024.0,
+                static_cast<double>(result.keyframe_bytes) / (1024.0 * 1024.0),
+                static_cast<double>(result.place_bytes) / (1024.0 * 1024.0), result.places, result.place_spacing_m,
+                result.archived);
     if (ate_all) {
       if (loops_on) std::printf("  ATE RMSE [m]        %.3f odometry only\n", ate_odom->rmse_m);
       std::printf("  ATE RMSE [m]        %.3f all frames", ate_all->rmse_m);

@@ -136,6 +136,21 @@ TEST_CASE("scan context detector: finds the rotated revisit, respects the time g
     fresh.detect(kfs, out);
     CHECK(out.empty());
   }
+  SECTION("an archived match is no candidate and its descriptor is freed") {
+    // What a bounded store (Slam's) does to a keyframe a kept place stands for.
+    REQUIRE(!detector.descriptor(0).bins.empty());
+    kfs[0].cloud.clear();
+    kfs[0].archived = true;
+    kfs.push_back(kfs[3]);
+    kfs.back().stamp_s = 200.0;
+    detector.detect(kfs, out);
+    for (const LoopCandidate& c : out) CHECK(c.index != 0);
+    CHECK(detector.descriptor(0).bins.empty());
+    CHECK(detector.descriptor(0).bins.capacity() == 0);
+    CHECK(!detector.descriptor(3).bins.empty());  // the first revisit, kept, now matches the second
+    REQUIRE(!out.empty());
+    CHECK(out[0].index == 3);
+  }
   SECTION("bad settings throw") {
     CHECK_THROWS_AS(ScanContextDetector(ScanContextConfig{.rings = 0}), ConfigError);
     CHECK_THROWS_AS(ScanContextDetector(ScanContextConfig{.max_radius_m = -1.0}), ConfigError);

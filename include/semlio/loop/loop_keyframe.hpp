@@ -26,9 +26,11 @@ struct LoopKeyframe {
   std::vector<Eigen::Vector3f> cloud;    ///< the preprocessed scan, voxel-downsampled, lidar frame (Scan Context input)
   std::vector<Class> labels;             ///< labels of `cloud` (empty = unlabeled)
   /// True when a bounded store (Slam's, pipeline/slam.hpp) dropped this
-  /// keyframe's features and cloud because a kept keyframe shows the same
-  /// place; stamp, pose (and the detectors' cached descriptors) remain.
-  /// Verification then builds its submap from the kept keyframes around it.
+  /// keyframe's features and cloud because a kept keyframe (a place) lies
+  /// within the store's place spacing, or a thinning under the store's
+  /// ceiling dropped it; stamp and pose remain (the radius detector still
+  /// proposes it; Scan Context frees its descriptor). Verification then
+  /// builds its submap from the kept keyframes around it.
   bool archived = false;
 };
 

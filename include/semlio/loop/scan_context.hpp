@@ -173,7 +173,11 @@ inline double scan_context_yaw(int shift, int sectors) {
 /// from LoopKeyframe::cloud when first seen), ring-key short list over the
 /// keyframes older than the time gap, full column-shift distance on the short
 /// list; candidates below max_distance, best first, with the guess T_from_to
-/// = rotation about z by the shift's yaw, zero translation. Not thread-safe.
+/// = rotation about z by the shift's yaw, zero translation. Keyframes that a
+/// bounded store archived (LoopKeyframe::archived: a kept place within the
+/// store's place spacing stands for them) are no candidates, and their
+/// descriptors are freed (~5 kB each at 20 x 60), so the cache grows by a
+/// fixed-size record per keyframe only. Not thread-safe.
 class ScanContextDetector {
  public:
   using Config = ScanContextConfig;
@@ -196,6 +200,10 @@ class ScanContextDetector {
     // Ring-key short list (L2), among keyframes older than the time gap.
     shortlist_.clear();
     for (std::size_t i = 0; i < query; ++i) {
+      if (keyframes[i].archived) {
+        if (!descriptors_[i].bins.empty()) descriptors_[i] = ScanContext{};
+        continue;
+      }
       if (!(keyframes[query].stamp_s - keyframes[i].stamp_s > config_.min_time_gap_s)) continue;
       double d2 = 0.0;
       for (std::size_t r = 0; r < q.ring_key.size(); ++r) {
@@ -219,7 +227,8 @@ class ScanContextDetector {
     if (out.size() > config_.max_candidates) out.resize(config_.max_candidates);
   }
 
-  /// The cached descriptor of keyframe i (after a detect() that saw it).
+  /// The cached descriptor of keyframe i (after a detect() that saw it; empty
+  /// once the keyframe is archived).
   [[nodiscard]] const ScanContext& descriptor(std::size_t i) const { return descriptors_.at(i); }
   /// Number of cached descriptors.
   [[nodiscard]] std::size_t descriptor_count() const noexcept { return descriptors_.size(); }

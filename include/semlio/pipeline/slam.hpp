@@ -36,40 +36,53 @@
 /// motion partly came from the constant-velocity prediction, and the factor
 /// gets the weak default diag(1/sigma_t^2, 1/sigma_r^2) (1 m, 0.1 rad).
 ///
-/// Memory (bounded by the explored area). Per keyframe the back end keeps a
+/// Memory (a configurable ceiling). Per keyframe the back end keeps a
 /// LoopKeyframe: the LOAM features (corners and voxelised surfaces, 13 bytes
 /// each: position + label; the per-point scan indices are dropped) when loops
 /// are on, and the preprocessed scan voxel-downsampled at
 /// keyframe_cloud_leaf_m (0.5 m default; 13 bytes per point): ~0.2-0.25 MB
 /// per keyframe (keyframe_bytes() reports the whole store; semlio_kitti
 /// writes it to report.json). Kept like that for every keyframe this would
-/// grow linearly with the drive, so the store is bounded as follows:
+/// grow linearly with the drive, so the store is bounded in three steps:
 /// - the newest max_keyframe_clouds keyframes (default 100, ~10 s of a car's
 ///   drive at LIO-SAM's 1 m keyframe spacing) keep everything;
 /// - an older keyframe is "retired": it stays a "place" (features and cloud
-///   kept) only when no place lies within place_spacing_m (default 2 m,
-///   LIO-SAM's surroundingKeyframeDensity) of its current position estimate;
-///   otherwise its features and cloud are freed (LoopKeyframe::archived) and
-///   only the stamp, the pose (graph node) and the detector's descriptor
-///   remain (Scan Context caches its descriptor before retirement: only
-///   keyframes the detector has seen are retired).
-/// Driving a street again therefore adds nothing once its keyframes retire;
-/// the kept data is bounded by the explored area (~one place per 2 m of
-/// distinct road; max_keyframe_clouds = 0 keeps every keyframe in full, the
-/// unbounded store). Places keep the keyframe frame and the graph pose, so
-/// later loop closures still move them (a world-frame voxel archive would go
-/// stale at every loop correction). Loop verification against an old place
-/// whose own data was dropped builds its submap from the places around it
-/// (loop/loop_verifier.hpp, detail::select_submap). The semantic map is built,
-/// as LIO-SAM's global map, from the kept keyframes (places + recent) at their
-/// optimised poses (LIO-SAM thins its map keyframes at 10 m).
-/// Per keyframe the graph keeps a node and two factors (~1 kB) and the
-/// keyframe list ~0.3 kB; per frame an index and a relative pose (~70 bytes)
-/// are kept. The front end's own local map is bounded by its radius.
+///   kept) only when no place lies within the place spacing (initially
+///   place_spacing_m, default 2 m, LIO-SAM's surroundingKeyframeDensity) of
+///   its current position estimate; otherwise its features and cloud are
+///   freed (LoopKeyframe::archived) and only the stamp, the pose (graph node)
+///   and the detector's descriptor remain (Scan Context caches its descriptor
+///   before retirement: only keyframes the detector has seen are retired);
+/// - the places' data has a ceiling, max_place_bytes (default 128 MiB, ~550
+///   places of a 64-beam scanner): when a new place takes it over, the place
+///   spacing grows by place_thinning_factor (1.5) and the places are thinned
+///   to it (greedy, newest first: a place stays when no place already kept
+///   lies within the new spacing; the others are archived), repeated until
+///   the places fit. New places then also use the grown spacing. So the
+///   explored area stays covered, ever more sparsely, and a revisit of any
+///   old street still finds places within its loop search radius (loop
+///   verification builds its submap from the kept keyframes around an
+///   archived candidate, loop/loop_verifier.hpp detail::select_submap). A
+///   ceiling below one place's data keeps no places (loops then only close
+///   within the recent window). max_place_bytes = 0: no ceiling (the store
+///   then grows with the distinct road driven, ~0.1 MB per new metre).
+/// Places keep the keyframe frame and the graph pose, so later loop
+/// closures still move them (a world-frame voxel archive would go stale at
+/// every loop correction). The semantic map is built, as LIO-SAM's global
+/// map, from the kept keyframes (places + recent) at their optimised poses,
+/// so it is bounded by the same ceiling (SemanticMap: one point per occupied
+/// voxel, the kept clouds overlap heavily). max_keyframe_clouds = 0 keeps
+/// every keyframe in full (no retirement, no ceiling).
+/// What still grows with the drive is bookkeeping: per keyframe the record
+/// (~0.3 kB), a graph node and two factors (~1 kB); per frame an index and
+/// two poses (~120 bytes): about 1.2 MB per km at 10 Hz and a keyframe per
+/// metre and a quarter. The front end's own local map is bounded by its
+/// radius.
 ///
 /// Cost per frame: the odometry plus, on keyframes, a voxel downsample, the
 /// loop detector (linear in keyframes, microseconds), the retirement of one
-/// keyframe (linear in places, microseconds) and a window graph update
+/// keyframe (linear in places, microseconds; a thinning, quadratic in the
+/// places, is rare: each one multiplies the spacing) and a window graph update
 /// (PoseGraphConfig::window_size newest nodes and their factors, constant). A loop closure costs a verification and a full graph
 /// solve; those frames are flagged in the report (loop_checked/loop_closed).
 ///
@@ -126,7 +139,9 @@ struct SlamConfig {
   double keyframe_cloud_leaf_m = 0.5;        ///< voxel leaf of the cloud kept per keyframe (Scan Context, map) [m]
   double keyframe_cloud_max_range_m = 80.0;  ///< drop farther points from the kept cloud [m]; 0 = keep all
   std::size_t max_keyframe_clouds = 100;     ///< newest keyframes kept in full; older ones retire (file comment); 0 = never retire (unbounded)
-  double place_spacing_m = 2.0;              ///< a retiring keyframe keeps its data only when no place is within this distance [m]
+  double place_spacing_m = 2.0;              ///< a retiring keyframe keeps its data only when no place is within this distance [m] (grows when thinning)
+  std::size_t max_place_bytes = std::size_t{128} << 20;  ///< ceiling on the places' data (features + clouds) [bytes]; 0 = no ceiling
+  double place_thinning_factor = 1.5;        ///< over the ceiling: the place spacing grows by this factor and the places are thinned (> 1)
 
   /// Throws ConfigError naming the bad field and value.
   void validate() const {
@@ -142,6 +157,10 @@ struct SlamConfig {
     positive(weak_sigma_rad, "weak_sigma_rad");
     positive(keyframe_cloud_leaf_m, "keyframe_cloud_leaf_m");
     positive(place_spacing_m, "place_spacing_m");
+    if (!(place_thinning_factor > 1.0) || !std::isfinite(place_thinning_factor)) {
+      throw ConfigError("SlamConfig.place_thinning_factor = " + std::to_string(place_thinning_factor) +
+                        ", expected a finite value > 1");
+    }
     if (!(min_information <= max_information)) {
       throw ConfigError("SlamConfig.min_information = " + std::to_string(min_information) +
                         " exceeds max_information = " + std::to_string(max_information));
@@ -227,7 +246,8 @@ class Slam {
         odometry_(std::move(odometry)),
         closer_(std::move(detector), config.loop),
         graph_(config.graph),
-        cloud_grid_(VoxelGridConfig{.leaf_size_m = config.keyframe_cloud_leaf_m}) {}
+        cloud_grid_(VoxelGridConfig{.leaf_size_m = config.keyframe_cloud_leaf_m}),
+        place_spacing_m_(config.place_spacing_m) {}
 
   /// Processes one scan (sensor frame; consumed as the front end's working
   /// buffer). `T_world_lidar_prior`, when given, is a pose prior in the world
@@ -305,27 +325,46 @@ class Slam {
   [[nodiscard]] std::size_t archived_count() const noexcept { return archived_; }
   /// Number of keyframes retired so far (places + archived).
   [[nodiscard]] std::size_t retired_count() const noexcept { return next_retire_; }
+  /// Data bytes (features, clouds, labels) of the places; at most
+  /// config().max_place_bytes when that is > 0.
+  [[nodiscard]] std::size_t place_bytes() const noexcept { return place_bytes_; }
+  /// The current place spacing [m]: place_spacing_m, grown by each thinning.
+  [[nodiscard]] double place_spacing_m() const noexcept { return place_spacing_m_; }
+  /// Number of thinnings so far (each grew the spacing by place_thinning_factor).
+  [[nodiscard]] std::size_t place_thinnings() const noexcept { return thinnings_; }
 
-  /// Heap bytes of the stored keyframes (features, clouds, labels).
-  [[nodiscard]] std::size_t keyframe_bytes() const noexcept {
-    std::size_t b = keyframes_.capacity() * sizeof(LoopKeyframe);
+  /// Heap bytes of one keyframe's data (features, clouds, labels).
+  [[nodiscard]] static std::size_t data_bytes(const LoopKeyframe& k) noexcept {
     const auto set_bytes = [](const FeatureSet& f) {
       return f.points.capacity() * sizeof(Eigen::Vector3f) + f.labels.capacity() * sizeof(Class) +
              f.indices.capacity() * sizeof(std::uint32_t);
     };
-    for (const LoopKeyframe& k : keyframes_) {
-      b += set_bytes(k.corners) + set_bytes(k.surfaces);
-      b += k.cloud.capacity() * sizeof(Eigen::Vector3f) + k.labels.capacity() * sizeof(Class);
-    }
+    return set_bytes(k.corners) + set_bytes(k.surfaces) + k.cloud.capacity() * sizeof(Eigen::Vector3f) +
+           k.labels.capacity() * sizeof(Class);
+  }
+
+  /// Heap bytes of the stored keyframes: records plus data (features, clouds,
+  /// labels) = recent keyframes + places + one record per keyframe.
+  [[nodiscard]] std::size_t keyframe_bytes() const noexcept {
+    std::size_t b = keyframes_.capacity() * sizeof(LoopKeyframe);
+    for (const LoopKeyframe& k : keyframes_) b += data_bytes(k);
     return b;
   }
 
-  /// The global semantic map: the kept keyframe clouds (places + the newest
-  /// max_keyframe_clouds; archived keyframes have none) at their optimised
-  /// poses, merged by SemanticMap (map/semantic_map.hpp).
+  /// Adds the kept keyframe clouds (places + the newest max_keyframe_clouds;
+  /// archived keyframes have none) at their optimised poses to `map`.
+  void build_semantic_map(SemanticMap& map) const {
+    for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+      if (keyframes_[k].cloud.empty()) continue;
+      map.insert(graph_.pose(static_cast<NodeId>(k)), keyframes_[k].cloud, keyframes_[k].labels);
+    }
+  }
+
+  /// The global semantic map: build_semantic_map() into a SemanticMap
+  /// (map/semantic_map.hpp), as a cloud in the world frame.
   [[nodiscard]] Scan semantic_map(const SemanticMapConfig& config = {}) const {
     SemanticMap map(config);
-    for (std::size_t k = 0; k < keyframes_.size(); ++k) map.insert(graph_.pose(static_cast<NodeId>(k)), keyframes_[k].cloud, keyframes_[k].labels);
+    build_semantic_map(map);
     return map.cloud();
   }
 
@@ -428,14 +467,15 @@ class Slam {
   }
 
   // Retires the keyframes beyond the newest max_keyframe_clouds that the loop
-  // detector has already seen (its last query is at or after their stamp).
+  // detector has already seen (its last query is at or after their stamp),
+  // then holds the places to their ceiling.
   void retire_keyframes() {
     if (config_.max_keyframe_clouds == 0) return;
     while (keyframes_.size() - next_retire_ > config_.max_keyframe_clouds) {
       LoopKeyframe& kf = keyframes_[next_retire_];
-      if (config_.loop_closure && (!last_query_s_ || kf.stamp_s > *last_query_s_)) return;
+      if (config_.loop_closure && (!last_query_s_ || kf.stamp_s > *last_query_s_)) break;
       const Eigen::Vector3d p = kf.T_world_lidar.translation();
-      const double s2 = config_.place_spacing_m * config_.place_spacing_m;
+      const double s2 = place_spacing_m_ * place_spacing_m_;
       bool covered = false;
       for (const std::size_t j : places_) {
         if ((keyframes_[j].T_world_lidar.translation() - p).squaredNorm() < s2) {
@@ -444,16 +484,61 @@ class Slam {
         }
       }
       if (covered) {
-        kf.corners = FeatureSet{};
-        kf.surfaces = FeatureSet{};
-        kf.cloud = std::vector<Eigen::Vector3f>{};
-        kf.labels = std::vector<Class>{};
-        kf.archived = true;
-        ++archived_;
+        archive(kf);
       } else {
         places_.push_back(next_retire_);
+        place_bytes_ += data_bytes(kf);
       }
       ++next_retire_;
+    }
+    enforce_place_ceiling();
+  }
+
+  // Frees a keyframe's data (it keeps stamp, pose and the detector's descriptor).
+  void archive(LoopKeyframe& kf) {
+    kf.corners = FeatureSet{};
+    kf.surfaces = FeatureSet{};
+    kf.cloud = std::vector<Eigen::Vector3f>{};
+    kf.labels = std::vector<Class>{};
+    kf.archived = true;
+    ++archived_;
+  }
+
+  // While the places' data exceeds max_place_bytes: grow the spacing and thin
+  // the places to it (greedy, newest first). Ends: at a large enough spacing
+  // one place is left, and one place over the ceiling is archived too.
+  void enforce_place_ceiling() {
+    if (config_.max_place_bytes == 0) return;
+    while (place_bytes_ > config_.max_place_bytes && !places_.empty()) {
+      if (places_.size() == 1) {
+        place_bytes_ -= data_bytes(keyframes_[places_.front()]);
+        archive(keyframes_[places_.front()]);
+        places_.clear();
+        break;
+      }
+      place_spacing_m_ *= config_.place_thinning_factor;
+      ++thinnings_;
+      const double s2 = place_spacing_m_ * place_spacing_m_;
+      kept_.clear();
+      for (auto it = places_.rbegin(); it != places_.rend(); ++it) {
+        LoopKeyframe& kf = keyframes_[*it];
+        const Eigen::Vector3d p = kf.T_world_lidar.translation();
+        bool covered = false;
+        for (const std::size_t j : kept_) {
+          if ((keyframes_[j].T_world_lidar.translation() - p).squaredNorm() < s2) {
+            covered = true;
+            break;
+          }
+        }
+        if (covered) {
+          place_bytes_ -= data_bytes(kf);
+          archive(kf);
+        } else {
+          kept_.push_back(*it);
+        }
+      }
+      std::reverse(kept_.begin(), kept_.end());
+      places_.swap(kept_);
     }
   }
 
@@ -479,6 +564,10 @@ class Slam {
   std::vector<std::size_t> places_;        // retired keyframes that kept their data
   std::size_t next_retire_ = 0;            // keyframes [0, next_retire_) are retired
   std::size_t archived_ = 0;               // retired keyframes whose data was dropped
+  double place_spacing_m_ = 2.0;           // current place spacing (grows with each thinning)
+  std::size_t place_bytes_ = 0;            // data bytes of the places
+  std::size_t thinnings_ = 0;
+  std::vector<std::size_t> kept_;          // thinning buffer
   std::vector<SE3d> T_odom_kf_;            // odometry pose of each keyframe
   std::vector<std::size_t> keyframe_frame_;
   std::vector<SlamLoop> loops_;
