@@ -34,7 +34,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cmath>
@@ -43,6 +42,7 @@
 #include <vector>
 
 #include <semlio/core/error.hpp>
+#include <semlio/graph/dense_kernels.hpp>
 #include <semlio/imu/imu_factor.hpp>
 #include <semlio/imu/nav_state.hpp>
 #include <semlio/imu/preintegration.hpp>
@@ -144,11 +144,14 @@ class InertialGraph {
     check(i, "add_imu");
     check(j, "add_imu");
     if (!(i < j)) throw ValueError("InertialGraph::add_imu: state " + std::to_string(i) + " is not before " + std::to_string(j));
-    Matrix9d cov = pim.covariance();
+    Eigen::MatrixXd cov = pim.covariance();
     cov.diagonal().array() += config_.min_variance;
-    Eigen::Matrix<double, 6, 6> bias_cov = pim.bias_walk_covariance();
+    Eigen::MatrixXd bias_cov = pim.bias_walk_covariance();
     bias_cov.diagonal().array() += config_.min_variance;
-    imus_.push_back({i, j, pim, symmetric(inverse_spd(cov)), symmetric(inverse_spd(bias_cov))});
+    Imu f{i, j, pim, detail::inverse_spd(cov, 0.0), detail::inverse_spd(bias_cov, 0.0)};
+    detail::symmetrize(f.information);
+    detail::symmetrize(f.bias_information);
+    imus_.push_back(f);
   }
 
   /// Runs LM, then marginalises states beyond the window. On kSingular /
@@ -249,11 +252,12 @@ class InertialGraph {
     if (ldlt.info() != Eigen::Success) return Matrix15d::Zero();
     const auto k = static_cast<Eigen::Index>(15 * (id - first_id_));
     Eigen::MatrixXd E = Eigen::MatrixXd::Zero(n, 15);
-    E.block<15, 15>(k, 0).setIdentity();
+    for (Eigen::Index r = 0; r < 15; ++r) E(k + r, r) = 1.0;
     const Eigen::MatrixXd X = ldlt.solve(E);
-    Matrix15d c = X.block<15, 15>(k, 0);
+    Matrix15d c = X.block(k, 0, 15, 15);
     if (!c.allFinite()) return Matrix15d::Zero();
-    return symmetric(c);
+    detail::symmetrize(c);
+    return c;
   }
   /// The settings.
   [[nodiscard]] const Config& config() const noexcept { return config_; }
@@ -287,35 +291,27 @@ class InertialGraph {
     }
   }
 
+  // 0.5 (m + m^T) of a square matrix (any fixed size, through the one dynamic kernel).
   template <typename M>
   static M symmetric(const M& m) {
-    return M(0.5 * (m + m.transpose()));
+    M out = m;
+    detail::symmetrize(out);
+    return out;
   }
 
-  template <int N>
-  static Eigen::Matrix<double, N, N> inverse_spd(const Eigen::Matrix<double, N, N>& c) {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> es(c);
-    Eigen::Matrix<double, N, 1> inv = es.eigenvalues();
-    for (int k = 0; k < N; ++k) inv[k] = inv[k] > 0.0 ? 1.0 / inv[k] : 0.0;
-    return es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
-  }
-
-  // Adds J^T W J and J^T W r of one factor into the dense system.
-  template <int R>
-  static void accumulate(Eigen::MatrixXd& H, Eigen::VectorXd& g, Eigen::Index a,
-                         const Eigen::Matrix<double, R, 15>& Ja, Eigen::Index b,
-                         const Eigen::Matrix<double, R, 15>* Jb, const Eigen::Matrix<double, R, R>& W,
-                         const Eigen::Matrix<double, R, 1>& Wr) {
-    const Eigen::Matrix<double, 15, R> JaW = Ja.transpose() * W;
-    H.block<15, 15>(a, a) += JaW * Ja;
-    g.segment<15>(a) += Ja.transpose() * Wr;
-    if (Jb != nullptr) {
-      const Eigen::Matrix<double, 15, 15> Hab = JaW * (*Jb);
-      H.block<15, 15>(a, b) += Hab;
-      H.block<15, 15>(b, a) += Hab.transpose();
-      H.block<15, 15>(b, b) += Jb->transpose() * W * (*Jb);
-      g.segment<15>(b) += Jb->transpose() * Wr;
-    }
+  // Adds J_a^T W J_b blocks and J_a^T W r segments of one factor (residual
+  // dimension R = W.rows(), Jacobians R x 15) into the dense system.
+  static void accumulate(Eigen::MatrixXd& H, Eigen::VectorXd& g, Eigen::Index a, const detail::DenseIn& Ja,
+                         Eigen::Index b, const detail::DenseIn& Jb, const detail::DenseIn& W,
+                         const detail::DenseIn& Wr) {
+    detail::add_at_w_b(H.block(a, a, 15, 15), Ja, W, Ja);
+    detail::add_at_v(g.segment(a, 15), Ja, Wr);
+    Matrix15d Hab = Matrix15d::Zero();
+    detail::add_at_w_b(Hab, Ja, W, Jb);
+    H.block(a, b, 15, 15) += Hab;  // the two off-diagonal blocks stay exact transposes
+    detail::add_transposed(H.block(b, a, 15, 15), Hab);
+    detail::add_at_w_b(H.block(b, b, 15, 15), Jb, W, Jb);
+    detail::add_at_v(g.segment(b, 15), Jb, Wr);
   }
 
   // Builds H and g over `nodes` (the window, or a trial copy of it); returns the
@@ -332,21 +328,23 @@ class InertialGraph {
       const InertialNode& x = node(p.id);
       Matrix15d J;
       const Vector15d d = nav_difference(x.state, x.bias, p.x_lin, p.b_lin, &J);
-      const Vector15d Hd = p.H * d;
-      cost += d.dot(Hd) + 2.0 * p.b.dot(d);
-      const Matrix15d JtH = J.transpose() * p.H;
-      H.block<15, 15>(at(p.id), at(p.id)) += JtH * J;
-      g.segment<15>(at(p.id)) += J.transpose() * (Hd + p.b);
+      Vector15d Hd;
+      detail::set_a_b(Hd, p.H, d);
+      cost += detail::dot(d, Hd) + 2.0 * detail::dot(p.b, d);
+      detail::add_at_w_b(H.block(at(p.id), at(p.id), 15, 15), J, p.H, J);
+      Hd += p.b;
+      detail::add_at_v(g.segment(at(p.id), 15), J, Hd);
     }
     for (const Pose& p : poses_) {
       if (only_first && p.id != first_id_) continue;
       const InertialNode& x = node(p.id);
       const Eigen::Matrix<double, 6, 1> e = (p.T_world_imu.inverse() * x.state.pose()).log();
       const Eigen::Matrix<double, 6, 6> Je = SE3d::right_jacobian_inverse(e);
-      const Eigen::Matrix<double, 6, 1> We = p.information * e;
-      cost += e.dot(We);
-      H.block<6, 6>(at(p.id), at(p.id)) += Je.transpose() * p.information * Je;
-      g.segment<6>(at(p.id)) += Je.transpose() * We;
+      Eigen::Matrix<double, 6, 1> We;
+      detail::set_a_b(We, p.information, e);
+      cost += detail::dot(e, We);
+      detail::add_at_w_b(H.block(at(p.id), at(p.id), 6, 6), Je, p.information, Je);
+      detail::add_at_v(g.segment(at(p.id), 6), Je, We);
     }
     for (const Imu& f : imus_) {
       if (only_first && f.i != first_id_) continue;
@@ -355,15 +353,17 @@ class InertialGraph {
       Matrix9x15d Ji;
       Matrix9x15d Jj;
       const Vector9d r = imu_factor_error(f.pim, xi.state, xi.bias, xj.state, &Ji, &Jj);
-      const Vector9d Wr = f.information * r;
-      cost += r.dot(Wr);
-      accumulate<9>(H, g, at(f.i), Ji, at(f.j), &Jj, f.information, Wr);
+      Vector9d Wr;
+      detail::set_a_b(Wr, f.information, r);
+      cost += detail::dot(r, Wr);
+      accumulate(H, g, at(f.i), Ji, at(f.j), Jj, f.information, Wr);
       Matrix6x15d Bi;
       Matrix6x15d Bj;
       const Eigen::Matrix<double, 6, 1> rb = bias_walk_error(xi.bias, xj.bias, &Bi, &Bj);
-      const Eigen::Matrix<double, 6, 1> Wrb = f.bias_information * rb;
-      cost += rb.dot(Wrb);
-      accumulate<6>(H, g, at(f.i), Bi, at(f.j), &Bj, f.bias_information, Wrb);
+      Eigen::Matrix<double, 6, 1> Wrb;
+      detail::set_a_b(Wrb, f.bias_information, rb);
+      cost += detail::dot(rb, Wrb);
+      accumulate(H, g, at(f.i), Bi, at(f.j), Bj, f.bias_information, Wrb);
     }
     return cost;
   }
@@ -373,28 +373,27 @@ class InertialGraph {
   void marginalize_oldest() {
     const Id old = first_id_;
     const Id next = old + 1;
-    const Eigen::Index n = 30;
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(15 * nodes_.size()),
                                               static_cast<Eigen::Index>(15 * nodes_.size()));
     Eigen::VectorXd g = Eigen::VectorXd::Zero(H.rows());
     linearize(nodes_, H, g, true);
-    const Eigen::MatrixXd Hs = H.topLeftCorner(n, n);
-    const Eigen::VectorXd gs = g.head(n);
-    const Matrix15d H00 = symmetric(Matrix15d(Hs.topLeftCorner<15, 15>()));
-    const Eigen::SelfAdjointEigenSolver<Matrix15d> es(H00);
-    Vector15d inv = es.eigenvalues();
-    const double cut = 1e-12 * std::max(1.0, inv.cwiseAbs().maxCoeff());
-    for (int k = 0; k < 15; ++k) inv[k] = inv[k] > cut ? 1.0 / inv[k] : 0.0;
-    const Matrix15d H00_inv = es.eigenvectors() * inv.asDiagonal() * es.eigenvectors().transpose();
-    const Matrix15d H10 = Hs.block<15, 15>(15, 0);
-    Matrix15d Hm = Hs.block<15, 15>(15, 15) - H10 * H00_inv * H10.transpose();
-    Vector15d bm = gs.segment<15>(15) - H10 * H00_inv * gs.head<15>();
+    // H00 = its block, H01 = the coupling block (H is assembled exactly
+    // symmetric, so H10 = H01^T); Hm = H11 - H01^T H00^+ H01, bm = g1 - H01^T H00^+ g0.
+    Eigen::MatrixXd H00 = H.topLeftCorner(15, 15);
+    detail::symmetrize(H00);
+    const Eigen::MatrixXd H00_inv = detail::inverse_spd(H00, 1e-12);
+    const Eigen::MatrixXd H01 = H.block(0, 15, 15, 15);
+    Matrix15d Hm = H.block(15, 15, 15, 15);
+    detail::add_at_w_b(Hm, H01, H00_inv, H01, -1.0);
+    Vector15d bm = g.segment(15, 15);
+    detail::add_at_w_b(bm, H01, H00_inv, g.head(15), -1.0);
+    detail::symmetrize(Hm);
     // Drop the factors on the old state; the marginal prior replaces them.
     std::erase_if(priors_, [old](const Prior& p) { return p.id == old; });
     std::erase_if(poses_, [old](const Pose& p) { return p.id == old; });
     std::erase_if(imus_, [old](const Imu& f) { return f.i == old || f.j == old; });
     const InertialNode& x = nodes_[1];
-    if (Hm.allFinite() && bm.allFinite()) priors_.push_back({next, x.state, x.bias, symmetric(Hm), bm});
+    if (Hm.allFinite() && bm.allFinite()) priors_.push_back({next, x.state, x.bias, Hm, bm});
     nodes_.erase(nodes_.begin());
     ++first_id_;
   }
