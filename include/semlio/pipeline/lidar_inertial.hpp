@@ -52,6 +52,23 @@
 /// (assign_times_from_azimuth; default KITTI raw: clockwise from the front;
 /// the simulator's sweeps start facing backwards: start_azimuth_rad = pi --
 /// a wrong start misplaces half of each sweep by half a sweep's motion).
+///
+/// Weak directions (a straight road's along-track axis). Build the front end
+/// with solver.reset_weak_directions on (GaussNewtonConfig): the directions
+/// the solver's relative test flags then stay at the prediction -- the IMU's,
+/// or the velocity hint's while initialising -- and, with the default
+/// DegenerateInformation::kNone, the graph takes no lidar information there.
+/// Left to the lidar, the along-road solution on the simulated highway comes
+/// out ~5 % short per frame (ring patterns on flat ground pull it back);
+/// initialised from those poses, gravity was tilted 4.1 deg along the road
+/// (0.05 deg with the reset). What stays unobservable: with no lidar
+/// information along the road and no velocity measurement, a tilt of the
+/// front end's map (its pitch drifts ~0.4 deg over 500 m there) is
+/// indistinguishable from an along-road acceleration (g * tilt), so the
+/// along-road error still grows with time squared; velocity_factors (INS
+/// velocity on every state) removes that, at the price of no longer being
+/// lidar-inertial alone.
+///
 /// Not thread-safe: one instance per sensor stream.
 
 #include <Eigen/Core>
@@ -100,6 +117,19 @@ enum class LidarInformation {
   kHessian,
 };
 
+/// What the front end's pose tells the inertial graph along the directions
+/// its solve flagged degenerate (SolveReport::degenerate_directions).
+enum class DegenerateInformation {
+  /// None along every flagged direction (the absolute and the relative test).
+  kNone,
+  /// None only along the directions the solver froze at the prediction (its
+  /// step remapping, eigenvalue below GaussNewtonConfig::degeneracy_threshold:
+  /// the solution there is the IMU's own prediction and would count twice);
+  /// directions flagged only by the relative test (degeneracy_ratio, a report
+  /// that does not change the solution) keep the Hessian's information.
+  kRemappedOnly,
+};
+
 /// Settings of LidarInertialOdometry. Defaults: the simulator's IMU, KITTI's
 /// 10 Hz lidar.
 struct LidarInertialConfig {
@@ -114,6 +144,8 @@ struct LidarInertialConfig {
   double lidar_rotation_sigma_rad = 0.005; ///< front-end pose noise, rotation (1 sigma) [rad]
   /// Shape of the front end's pose information (see LidarInformation).
   LidarInformation lidar_information = LidarInformation::kHessian;
+  /// Information along the directions the front end flagged degenerate.
+  DegenerateInformation degenerate_information = DegenerateInformation::kNone;
   /// Residual noise that turns the front end's Hessian J^T W J into an
   /// information (kHessian): H / sigma^2, then capped by the diagonal sigmas
   /// above. Larger than a single point's noise because the residuals are
@@ -123,6 +155,11 @@ struct LidarInertialConfig {
   double init_gyro_bias_sigma_radps = 1e-3;   ///< prior on the gyro bias after initialisation [rad/s]
   double init_accel_bias_sigma_mps2 = 0.1;    ///< prior on the accel bias after initialisation [m/s^2]
   double reanchor_velocity_sigma_mps = 1.0;   ///< velocity prior after an IMU fallback [m/s]
+  /// Pushed velocities (push_velocity) also become velocity factors on every
+  /// state after initialisation: INS-aided, no longer lidar-inertial alone
+  /// (off: they only guide the start-up).
+  bool velocity_factors = false;
+  double velocity_factor_sigma_mps = 0.1;  ///< noise of such a velocity, per axis (1 sigma) [m/s]
   bool deskew = false;               ///< deskew sweeps (raw data, --distortion on); not for KITTI odometry scans
   double sweep_period_s = 0.1;       ///< one sweep [s]
   double frame_period_s = 0.1;       ///< nominal time between scans (constant-velocity deskew) [s]
@@ -155,6 +192,7 @@ constexpr const char* to_string(DeskewSource s) noexcept {
 /// Everything LidarInertialOdometry::process reports about one frame.
 struct LidarInertialReport {
   FrameReport frame;            ///< the front end's report (its pose is the scan-to-map result)
+  std::optional<SE3d> T_map_lidar_prior;  ///< initial guess given to the front end (IMU or velocity hint), if any
   SE3d T_map_lidar;             ///< lidar pose after the inertial optimisation (= frame's while initialising)
   bool initialized = false;     ///< inertial state available (after this frame)
   PredictionSource prediction = PredictionSource::kConstantVelocity;  ///< source of the initial guess
@@ -167,6 +205,7 @@ struct LidarInertialReport {
   ImuBias bias;                 ///< IMU bias (valid when initialized)
   Eigen::Vector3d gravity_map_mps2 = Eigen::Vector3d::Zero();  ///< gravity in the map frame (when initialized)
   std::size_t imu_rejected = 0; ///< push_imu rejections so far
+  bool velocity_factor = false; ///< a pushed velocity entered the graph for this frame (config.velocity_factors)
 };
 
 /// Information (6x6, lidar tangent [rho; phi], right perturbation) of a
@@ -177,8 +216,12 @@ struct LidarInertialReport {
 /// M = D^-1 (H / sigma_res^2) D^-1 = U diag(mu) U^T gives
 /// Omega = D U diag(mu / (1 + mu)) U^T D: the diagonal sigmas where the scan
 /// constrains the pose well (mu >> 1), the scan's own (small) information
-/// where it does not. A non-finite Hessian falls back to kDiagonal.
-inline Eigen::Matrix<double, 6, 6> lidar_pose_information(const SolveReport& solve, const LidarInertialConfig& c) {
+/// where it does not. A non-finite Hessian falls back to kDiagonal. With
+/// c.degenerate_information == kRemappedOnly only the flagged directions whose
+/// eigenvalue is below `remapped_below` (the solver's absolute threshold) get
+/// none.
+inline Eigen::Matrix<double, 6, 6> lidar_pose_information(const SolveReport& solve, const LidarInertialConfig& c,
+                                                          double remapped_below = 100.0) {
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
   using Vector6 = Eigen::Matrix<double, 6, 1>;
   Vector6 d;  // sqrt of the diagonal information
@@ -197,6 +240,9 @@ inline Eigen::Matrix<double, 6, 6> lidar_pose_information(const SolveReport& sol
   if (solve.degenerate_directions > 0 && solve.eigenvectors.allFinite()) {
     Matrix6 P = Matrix6::Identity();
     for (int k = 0; k < std::min(solve.degenerate_directions, 6); ++k) {
+      if (c.degenerate_information == DegenerateInformation::kRemappedOnly && !(solve.eigenvalues[k] < remapped_below)) {
+        continue;
+      }
       const Vector6 v = solve.eigenvectors.col(k).normalized();
       P -= v * v.transpose();
     }
@@ -285,6 +331,7 @@ class LidarInertialOdometry {
     positive(config_.init_gyro_bias_sigma_radps, "init_gyro_bias_sigma_radps");
     positive(config_.init_accel_bias_sigma_mps2, "init_accel_bias_sigma_mps2");
     positive(config_.reanchor_velocity_sigma_mps, "reanchor_velocity_sigma_mps");
+    positive(config_.velocity_factor_sigma_mps, "velocity_factor_sigma_mps");
     positive(config_.lidar_residual_sigma_m, "lidar_residual_sigma_m");
     positive(config_.sweep_period_s, "sweep_period_s");
     positive(config_.frame_period_s, "frame_period_s");
@@ -317,8 +364,10 @@ class LidarInertialOdometry {
   /// initial state takes it as its velocity. On a road that does not
   /// constrain the along-track motion (a straight highway entered at cruise
   /// speed) it is the only source of that motion -- neither the lidar nor the
-  /// IMU (no acceleration) observes it. Returns false for a non-finite one or
-  /// one not after the previous.
+  /// IMU (no acceleration) observes it. With config.velocity_factors also a
+  /// velocity factor on the state nearest to it (within half a frame period)
+  /// after initialisation. Returns false for a non-finite one or one not
+  /// after the previous.
   bool push_velocity(double stamp_s, const Eigen::Vector3d& v_imu_mps) {
     if (!std::isfinite(stamp_s) || !v_imu_mps.allFinite()) return false;
     if (!velocities_.empty() && !(stamp_s > velocities_.back().first)) return false;
@@ -414,14 +463,14 @@ class LidarInertialOdometry {
     first_scans_.clear();
   }
 
-  // The pushed velocity (IMU frame) nearest to IMU time t, within 0.2 s.
-  [[nodiscard]] std::optional<Eigen::Vector3d> velocity_near(double t_imu) const {
+  // The pushed velocity (IMU frame) nearest to IMU time t, within max_dt_s.
+  [[nodiscard]] std::optional<Eigen::Vector3d> velocity_near(double t_imu, double max_dt_s = 0.2) const {
     if (velocities_.empty()) return std::nullopt;
     const auto* best = &velocities_.front();
     for (const auto& v : velocities_) {
       if (std::abs(v.first - t_imu) < std::abs(best->first - t_imu)) best = &v;
     }
-    if (std::abs(best->first - t_imu) > 0.2) return std::nullopt;
+    if (std::abs(best->first - t_imu) > max_dt_s) return std::nullopt;
     return best->second;
   }
 
@@ -452,7 +501,8 @@ class LidarInertialOdometry {
     if (config_.deskew && frames_ == 2) restart_deskewed();
     const std::optional<SE3d> hint = velocity_motion(scan.stamp_s);
     deskew_cv(scan, hint ? *hint : cv_motion(scan.stamp_s), rep);
-    rep.frame = odometry_->process(scan, hint && frames_ > 0 ? std::optional<SE3d>(T_last_lidar_ * *hint) : std::nullopt);
+    if (hint && frames_ > 0) rep.T_map_lidar_prior = T_last_lidar_ * *hint;
+    rep.frame = odometry_->process(scan, rep.T_map_lidar_prior);
     rep.T_map_lidar = rep.frame.T_map_lidar;
     if (rep.frame.status == OdometryStatus::kTimeWentBackwards) return;
     T_prev_lidar_ = T_last_lidar_;
@@ -509,7 +559,11 @@ class LidarInertialOdometry {
 
   // Information of the front end's pose in the IMU tangent.
   [[nodiscard]] Eigen::Matrix<double, 6, 6> pose_information(const FrameReport& f) const {
-    const Eigen::Matrix<double, 6, 6> info = lidar_pose_information(f.solve, config_);
+    double remapped_below = 100.0;
+    if constexpr (requires(const OdometryT& o) { o.config().solver.degeneracy_threshold; }) {
+      remapped_below = odometry_->config().solver.degeneracy_threshold;
+    }
+    const Eigen::Matrix<double, 6, 6> info = lidar_pose_information(f.solve, config_, remapped_below);
     // xi_imu = Ad(T_imu_lidar) xi_lidar: Omega_imu = A^-T Omega_lidar A^-1.
     const Eigen::Matrix<double, 6, 6> A_inv = T_lidar_imu_.adjoint();
     return A_inv.transpose() * info * A_inv;
@@ -546,6 +600,7 @@ class LidarInertialOdometry {
       if (!done) deskew_cv(scan, T_prev_current, rep);
     }
 
+    rep.T_map_lidar_prior = prior;
     rep.frame = odometry_->process(scan, prior);
     rep.T_map_lidar = rep.frame.T_map_lidar;
     if (rep.frame.status == OdometryStatus::kTimeWentBackwards) return;
@@ -573,6 +628,19 @@ class LidarInertialOdometry {
     graph_.add_imu(last_id, j, pim_);
     if (tracked(rep.frame.status)) {
       graph_.add_pose(j, rep.frame.T_map_lidar * T_lidar_imu_, pose_information(rep.frame));
+    }
+    if (config_.velocity_factors) {
+      // INS velocity (IMU frame) rotated into the map with the predicted
+      // attitude (held fixed: a prior on the velocity block only).
+      if (const auto v = velocity_near(t_imu, 0.5 * config_.frame_period_s)) {
+        NavState z = *predicted;
+        z.v_world_mps = predicted->R_world_imu.matrix() * *v;
+        Matrix15d info = Matrix15d::Zero();
+        info.block<3, 3>(6, 6) = Eigen::Matrix3d::Identity() /
+                                 (config_.velocity_factor_sigma_mps * config_.velocity_factor_sigma_mps);
+        graph_.add_prior(j, z, last.bias, info);
+        rep.velocity_factor = true;
+      }
     }
     rep.solve_status = graph_.optimize().status;
     rep.T_map_lidar = graph_.node(j).state.pose() * config_.T_imu_lidar;
