@@ -386,4 +386,31 @@ TEST_CASE("Residual fits reused across iterations give the very same normal equa
     }
   }
   CHECK(cache.hits() > query.surfaces.points.size());  // later iterations reused most fits
+
+  // Lines on the corners, with the pose-dependent ring-crossing check on:
+  // it must still be applied to a reused line.
+  semlio::PointToLineConfig line_config;
+  line_config.min_cone_angle_rad = 0.35;
+  const semlio::SemanticWeighted<semlio::PointToLine> line{semlio::PointToLine(line_config)};
+  semlio::ResidualFitCache<semlio::PointToLine::Model> line_cache;
+  nearest.set_map(local.corners());
+  nearest.set_scan(query.corners.points);
+  semlio::FeatureSet corners;
+  corners.points = query.corners.points;
+  corners.labels = query.corners.labels;
+  semlio::Correspondences matches;
+  for (int k = 0; k <= 8; ++k) {
+    const SE3d T = start * SE3d::exp((1.0 - std::pow(0.5, k)) * xi);
+    nearest.associate(T, matches);
+    semlio::NormalEquations plain;
+    semlio::NormalEquations cached;
+    semlio::accumulate_feature_terms(corners, matches, local.corners(), line, T, plain);
+    semlio::accumulate_feature_terms(corners, matches, local.corners(), line, T, cached, line_cache);
+    INFO("line iteration " << k);
+    CHECK(plain.H == cached.H);
+    CHECK(plain.b == cached.b);
+    CHECK(plain.num_residuals == cached.num_residuals);
+    CHECK(plain.num_residuals > 100);
+  }
+  CHECK(line_cache.hits() > query.corners.points.size());
 }

@@ -84,25 +84,47 @@ class PointToLine {
   /// With the given settings.
   explicit PointToLine(const Config& config = {}) : config_(config) {}
 
+  /// The line of one match set (PreparedResidual): reusable at any pose
+  /// while the matches stay the same.
+  struct Model {
+    Eigen::Vector3d u = Eigen::Vector3d::UnitX();                           ///< unit direction
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();                            ///< point on the line [m, map frame]
+    Eigen::Matrix<double, 2, 3> Et = Eigen::Matrix<double, 2, 3>::Zero();  ///< rows e1, e2: orthonormal, orthogonal to u
+    bool valid = false;                                                     ///< false: the checks failed, no residual
+  };
+
+  /// The line through the matches (the checks of the file comment, except
+  /// the pose-dependent ring crossing) and its residual basis.
+  [[nodiscard]] Model prepare(const MatchedPoints& matches) const {
+    Model model;
+    model.valid = line(matches, model.u, model.c);
+    if (!model.valid) return model;
+    // A fixed, deterministic basis of the plane orthogonal to u.
+    const Eigen::Vector3d e1 = detail::line_orthogonal_unit(model.u);
+    const Eigen::Vector3d e2 = model.u.cross(e1);
+    model.Et.row(0) = e1.transpose();
+    model.Et.row(1) = e2.transpose();
+    return model;
+  }
+
   /// r = E^T (T p_scan - c), E = [e1 e2] orthonormal, orthogonal to the line
   /// direction; J = E^T [R, -R hat(p_scan)] (right perturbation).
   [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& matches,
                                             const SE3d& T_map_scan) const {
+    return evaluate(feature, matches, prepare(matches), T_map_scan);
+  }
+
+  /// As evaluate(feature, matches, T_map_scan) with the line already fitted
+  /// (model = prepare(matches)).
+  [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& /*matches*/,
+                                            const Model& model, const SE3d& T_map_scan) const {
     ResidualTerm<kDim> term;
-    Eigen::Vector3d u;
-    Eigen::Vector3d c;
-    if (!line(matches, u, c)) return term;
+    if (!model.valid) return term;
     const Eigen::Matrix3d R = T_map_scan.rotation();
-    if (config_.min_cone_angle_rad > 0.0 && !crosses_ring(feature.p_scan, R.transpose() * u)) return term;
-    // A fixed, deterministic basis of the plane orthogonal to u.
-    const Eigen::Vector3d e1 = detail::line_orthogonal_unit(u);
-    const Eigen::Vector3d e2 = u.cross(e1);
-    Eigen::Matrix<double, 2, 3> Et;
-    Et.row(0) = e1.transpose();
-    Et.row(1) = e2.transpose();
+    if (config_.min_cone_angle_rad > 0.0 && !crosses_ring(feature.p_scan, R.transpose() * model.u)) return term;
     const Eigen::Vector3d p_map = R * feature.p_scan + T_map_scan.translation();
-    term.r = Et * (p_map - c);
-    term.J_r_xi = Et * detail::moved_point_jacobian(R, feature.p_scan);
+    term.r = model.Et * (p_map - model.c);
+    term.J_r_xi = model.Et * detail::moved_point_jacobian(R, feature.p_scan);
     term.valid = term.r.allFinite() && term.J_r_xi.allFinite();
     if (!term.valid) term = ResidualTerm<kDim>{};
     return term;
@@ -152,6 +174,6 @@ class PointToLine {
   Config config_;
 };
 
-static_assert(Residual<PointToLine>);
+static_assert(PreparedResidual<PointToLine>);
 
 }  // namespace semlio

@@ -79,5 +79,6 @@ class SemanticWeighted {
 static_assert(Residual<SemanticWeighted<PointToPlane>>);
 static_assert(Residual<SemanticWeighted<PointToLine>>);
 static_assert(PreparedResidual<SemanticWeighted<PointToPlane>>);
+static_assert(PreparedResidual<SemanticWeighted<PointToLine>>);
 
 }  // namespace semlio
