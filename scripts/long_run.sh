@@ -77,9 +77,9 @@ if "places" in mem:
           f"(ceiling {ceiling:.0f} MB{'' if ceiling > 0 else ': none'})")
     trace = mem.get("trace", [])
     if trace:
-        print("== keyframe store / place data / RSS by frame: " +
-              ", ".join(f"{t['frames']}: {t['keyframe_store_mb']:.0f}/{t['place_store_mb']:.0f}/{t['rss_mb']:.0f}"
-                        for t in trace) + " MB")
+        print("== keyframe store / place data / RSS / live heap by frame: " +
+              ", ".join(f"{t['frames']}: {t['keyframe_store_mb']:.0f}/{t['place_store_mb']:.0f}/{t['rss_mb']:.0f}/"
+                        f"{t.get('heap_live_mb', 0):.0f}" for t in trace) + " MB")
         if ceiling > 0:
             place_ok = all(t["place_store_mb"] <= ceiling + 1e-9 for t in trace)
     print(f"== place data within its ceiling at every sample: {'PASS' if place_ok else 'FAIL'}"

@@ -3,9 +3,14 @@
 # revisits its streets, loop closure must at least halve the odometry's ATE.
 #   scripts/loop_accuracy.sh            # 2000 frames (~10 min simulation + 2 runs)
 #   FRAMES=600 scripts/loop_accuracy.sh # a short version
+#   REVISIT=off SEED=2 scripts/loop_accuracy.sh  # the open route (see below)
 # Environment: FRAMES (2000), SEED (1), TRAFFIC (light), LABELS (labels),
 # PRESET (full), DETECTOR (radius|scancontext), BUILD_DIR (build),
-# OUT (results/loop_accuracy_<FRAMES>_<SEED>), DRIVE (reuse a simulated drive),
+# REVISIT (on: semlio_simulate --revisit, a block loop that comes back to its
+# start pose only at the end, so the loops all come in its last seconds; off:
+# the open route, a 1.3 km rectangle then a random walk, which drives streets
+# again from ~frame 1000 on),
+# OUT (results/loop_accuracy_<FRAMES>_<SEED>[_open]), DRIVE (reuse a simulated drive),
 # ONE_RUN=1 (skip the separate --loop off run: the --loop on run's
 # poses_odom.txt is the same odometry), KEEP_SCANS=1 (keep DRIVE/velodyne).
 # Prints the ATE of both runs and their ratio; exits 1 when the ratio > 0.5.
@@ -18,7 +23,13 @@ LABELS=${LABELS:-labels}
 PRESET=${PRESET:-full}
 DETECTOR=${DETECTOR:-radius}
 BUILD_DIR=${BUILD_DIR:-build}
-OUT=${OUT:-results/loop_accuracy_${FRAMES}_${SEED}}
+REVISIT=${REVISIT:-on}
+case "$REVISIT" in
+  on) REVISIT_FLAG=--revisit; SUFFIX= ;;
+  off) REVISIT_FLAG=; SUFFIX=_open ;;
+  *) echo "REVISIT must be on or off, got '$REVISIT'" >&2; exit 2 ;;
+esac
+OUT=${OUT:-results/loop_accuracy_${FRAMES}_${SEED}${SUFFIX}}
 DRIVE=${DRIVE:-$OUT/drive}
 
 if [ -z "${SKIP_BUILD:-}" ]; then
@@ -27,7 +38,7 @@ if [ -z "${SKIP_BUILD:-}" ]; then
 fi
 if [ ! -f "$DRIVE/sim.json" ] || [ ! -d "$DRIVE/velodyne" ]; then
   "$BUILD_DIR/examples/semlio_simulate" --world urban --traffic "$TRAFFIC" --frames "$FRAMES" --seed "$SEED" \
-    --revisit --out "$DRIVE"
+    $REVISIT_FLAG --out "$DRIVE"
 fi
 
 # Loop time gap: the detectors' default 30 s, shorter for short drives (a

@@ -13,6 +13,9 @@
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -135,6 +138,7 @@ struct RunResult {
     std::size_t store_bytes = 0;
     std::size_t place_bytes = 0;
     long rss_kb = 0;
+    std::size_t heap_live_bytes = 0;  // malloc's bytes in use (glibc mallinfo2; 0 elsewhere)
   };
   std::vector<MemorySample> memory_trace;
   semlio::Scan map;
@@ -165,6 +169,16 @@ long status_kb(const char* field) {
   return 0;
 }
 long peak_rss_kb() { return status_kb("VmHWM:"); }
+// Bytes the allocator has handed out and not got back (live heap + mmapped
+// blocks): tells live growth from fragmentation in the resident set.
+std::size_t heap_live_bytes() {
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+  const struct mallinfo2 mi = mallinfo2();
+  return mi.uordblks + mi.hblkhd;
+#else
+  return 0;
+#endif
+}
 long rss_kb() { return status_kb("VmRSS:"); }
 constexpr std::size_t kMemoryTraceEvery = 250;
 
@@ -207,7 +221,7 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
     result.back_end.push_back({r.loop_checked, r.loop_closed, r.backend_ms, r.total_ms, thread_cpu_ms() - cpu_start_ms});
     const std::size_t done = i - first + 1;
     if (done % kMemoryTraceEvery == 0 || i == last) {
-      result.memory_trace.push_back({done, slam.keyframe_bytes(), slam.place_bytes(), rss_kb()});
+      result.memory_trace.push_back({done, slam.keyframe_bytes(), slam.place_bytes(), rss_kb(), heap_live_bytes()});
     }
     if (tty) show_progress(done, n, start);
   }
@@ -618,7 +632,8 @@ int main(int argc, char** argv) {
         j.begin_object();
         j.field("frames", m.frame).field("keyframe_store_mb", static_cast<double>(m.store_bytes) / kMiB);
         j.field("place_store_mb", static_cast<double>(m.place_bytes) / kMiB);
-        j.field("rss_mb", static_cast<double>(m.rss_kb) / 1024.0).end_object();
+        j.field("rss_mb", static_cast<double>(m.rss_kb) / 1024.0);
+        j.field("heap_live_mb", static_cast<double>(m.heap_live_bytes) / kMiB).end_object();
       }
       j.end_array();
       j.end_object();
