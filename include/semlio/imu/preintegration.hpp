@@ -185,7 +185,10 @@ class ImuPreintegration {
     const double qg = config_.gyro_noise_density_radps_per_sqrthz * config_.gyro_noise_density_radps_per_sqrthz / dt;
     const double qa =
         config_.accel_noise_density_mps2_per_sqrthz * config_.accel_noise_density_mps2_per_sqrthz / dt;
-    cov_ = A * cov_ * A.transpose() + qg * B * B.transpose() + qa * C * C.transpose();
+    // lazyProduct: coefficient loops; the default 9x9 GEMM path costs every
+    // including translation unit ~1 s of compile time for nothing at this size.
+    const Matrix9d A_cov = A.lazyProduct(cov_);
+    cov_ = A_cov.lazyProduct(A.transpose()) + qg * B.lazyProduct(B.transpose()) + qa * C.lazyProduct(C.transpose());
     cov_ = 0.5 * (cov_ + cov_.transpose()).eval();
 
     // Bias Jacobians (the paper's appendix, for this scheme): p uses the old v, v the old R.
