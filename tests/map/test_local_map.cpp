@@ -115,6 +115,44 @@ TEST_CASE("LocalMap selects keyframes by radius and moves them into the map fram
   CHECK_THROWS_AS(map.set_keyframe_pose(7, SE3d()), semlio::ValueError);
 }
 
+TEST_CASE("LocalMap stores at most max_keyframes, dropping the farthest outside the radius", "[map]") {
+  semlio::LocalMapConfig config;
+  config.radius_m = 50.0;
+  config.max_keyframes = 5;
+  LocalMap map(config);
+  const FeatureCloud plane = plane_patch(Class::kRoad);
+  const FeatureCloud line = vertical_line(Class::kPole);
+  // A straight drive, a keyframe every 20 m; the map is rebuilt after each.
+  for (int k = 0; k < 12; ++k) {
+    CHECK(map.add_keyframe(translation(20.0 * k, 0, 0), line, plane) == static_cast<std::size_t>(k));
+    map.build(Eigen::Vector3d(20.0 * k, 0, 0));
+    CHECK(map.stored_keyframe_count() <= 5);
+  }
+  CHECK(map.keyframe_count() == 12);  // ids issued, dropped ones included
+  CHECK(map.stored_keyframe_count() == 5);
+  // Within 50 m of x = 220: the keyframes at 180, 200, 220 (ids 9, 10, 11).
+  CHECK(map.active_keyframes() == std::vector<std::size_t>{9, 10, 11});
+  CHECK(map.surfaces().size() == 3 * 12 * 12);
+  // The two oldest kept are the nearest ones outside the radius (140, 160 m).
+  CHECK(map.keyframe_pose(7).translation().x() == Approx(140.0));
+  CHECK_THROWS_AS(map.keyframe_pose(0), semlio::ValueError);  // dropped
+  map.set_keyframe_pose(0, translation(0, 0, 5));              // dropped: ignored
+  CHECK_THROWS_AS(map.set_keyframe_pose(12, SE3d()), semlio::ValueError);  // never given
+
+  // All inside the radius (standing still): the oldest goes.
+  LocalMap still(config);
+  for (int k = 0; k < 8; ++k) still.add_keyframe(translation(0.1 * k, 0, 0), line, plane);
+  still.build(Eigen::Vector3d::Zero());
+  CHECK(still.active_keyframes() == std::vector<std::size_t>{3, 4, 5, 6, 7});
+
+  // 0 keeps everything.
+  config.max_keyframes = 0;
+  LocalMap all(config);
+  for (int k = 0; k < 12; ++k) all.add_keyframe(translation(20.0 * k, 0, 0), line, plane);
+  all.build(Eigen::Vector3d::Zero());
+  CHECK(all.stored_keyframe_count() == 12);
+}
+
 TEST_CASE("LocalMap caches normals of surfaces and directions of corners", "[map]") {
   LocalMap map;
   // A rotated keyframe: the plane's normal and the line's direction rotate too.

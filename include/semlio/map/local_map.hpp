@@ -10,6 +10,15 @@
 /// one 10-NN fit per map point); the pipeline calls it when a keyframe is
 /// added (or the keyframe set near the vehicle changes), never per frame.
 /// Every per-frame query then reads the built maps only.
+///
+/// Memory: a stored keyframe's features are ~0.1 MB (KITTI-like scans), and
+/// a front end that kept them all grows without bound (~65 MB per 1000
+/// frames on a simulated drive). At most `max_keyframes` are kept: beyond
+/// that, build() drops the stored keyframe farthest from its query position
+/// among those outside the radius (the oldest when all are inside). What
+/// is dropped can no longer be matched against when the vehicle comes back
+/// -- that is the back end's job (Slam keeps spaced places for loop
+/// closure). Keyframes keep the id add_keyframe() gave them.
 
 #include <Eigen/Core>
 
@@ -46,6 +55,7 @@ struct LocalMapConfig {
   int shape_neighbours = 10;     ///< map points per cached normal / direction fit (Algorithm 1: 10)
   bool exclude_dynamic = false;  ///< keep movable classes (is_dynamic) out of the map
   int candidate_list = 32;       ///< cached nearest map points per point, for exact fast k-NN (0 = off; FeatureMap)
+  std::size_t max_keyframes = 1000;  ///< keyframes stored at most (file comment: which are dropped); 0 = keep all
 };
 
 namespace detail {
@@ -133,43 +143,56 @@ class LocalMap {
   }
 
   /// Stores a keyframe's corner and surface features (keyframe frame; labels
-  /// optional) at pose T_map_kf and returns its index. Does not rebuild.
-  /// Throws ValueError when labels are present with the wrong length.
+  /// optional) at pose T_map_kf and returns its id (0, 1, 2, ... in the order
+  /// added). Does not rebuild. Throws ValueError when labels are present
+  /// with the wrong length.
   template <LabelledCloud C1, LabelledCloud C2>
   std::size_t add_keyframe(const SE3d& T_map_kf, const C1& corners, const C2& surfaces) {
-    keyframes_.push_back(Keyframe{T_map_kf, keep(corners.points, corners.labels, "corners"),
+    keyframes_.push_back(Keyframe{next_id_, T_map_kf, keep(corners.points, corners.labels, "corners"),
                                   keep(surfaces.points, surfaces.labels, "surfaces")});
-    return keyframes_.size() - 1;
+    return next_id_++;
   }
 
-  /// Corrects the pose of keyframe i (e.g. after a loop closure); call build() after.
-  void set_keyframe_pose(std::size_t i, const SE3d& T_map_kf) {
-    if (i >= keyframes_.size()) {
-      throw ValueError("LocalMap::set_keyframe_pose: keyframe " + std::to_string(i) + " of " +
-                       std::to_string(keyframes_.size()));
+  /// Corrects the pose of keyframe `id` (e.g. after a loop closure); call
+  /// build() after. A keyframe already dropped (max_keyframes) is ignored;
+  /// an id never given throws ValueError.
+  void set_keyframe_pose(std::size_t id, const SE3d& T_map_kf) {
+    if (id >= next_id_) {
+      throw ValueError("LocalMap::set_keyframe_pose: keyframe " + std::to_string(id) + " of " +
+                       std::to_string(next_id_));
     }
-    keyframes_[i].T_map_kf = T_map_kf;
+    if (Keyframe* kf = find(id)) kf->T_map_kf = T_map_kf;
   }
 
-  /// Number of stored keyframes.
-  [[nodiscard]] std::size_t keyframe_count() const noexcept { return keyframes_.size(); }
-  /// Pose of keyframe i.
-  [[nodiscard]] const SE3d& keyframe_pose(std::size_t i) const { return keyframes_.at(i).T_map_kf; }
+  /// Number of keyframes added so far (ids issued), stored or dropped.
+  [[nodiscard]] std::size_t keyframe_count() const noexcept { return next_id_; }
+  /// Number of keyframes stored now (<= max_keyframes when that is set).
+  [[nodiscard]] std::size_t stored_keyframe_count() const noexcept { return keyframes_.size(); }
+  /// Pose of stored keyframe `id`; throws ValueError when it is not stored.
+  [[nodiscard]] const SE3d& keyframe_pose(std::size_t id) const {
+    const Keyframe* kf = find(id);
+    if (kf == nullptr) throw ValueError("LocalMap::keyframe_pose: keyframe " + std::to_string(id) + " is not stored");
+    return kf->T_map_kf;
+  }
 
   /// (Re)builds both maps from the keyframes within radius_m of center_map
   /// [m, map frame]: transform, voxel-downsample, k-d tree, cached axes.
+  /// First drops stored keyframes beyond max_keyframes (file comment).
   void build(const Eigen::Vector3d& center_map) {
+    trim(center_map);
     active_.clear();
+    active_pos_.clear();
     for (std::size_t i = 0; i < keyframes_.size(); ++i) {
       if ((keyframes_[i].T_map_kf.translation() - center_map).norm() <= config_.radius_m) {
-        active_.push_back(i);
+        active_.push_back(keyframes_[i].id);
+        active_pos_.push_back(i);
       }
     }
     build_one(&Keyframe::corners, config_.corner_leaf_m, corners_);
     build_one(&Keyframe::surfaces, config_.surface_leaf_m, surfaces_);
   }
 
-  /// Indices of the keyframes used by the last build(), ascending.
+  /// Ids of the keyframes used by the last build(), ascending.
   [[nodiscard]] const std::vector<std::size_t>& active_keyframes() const noexcept { return active_; }
   /// The corner (line) map of the last build().
   [[nodiscard]] const FeatureMap& corners() const noexcept { return corners_; }
@@ -184,10 +207,39 @@ class LocalMap {
     std::vector<Class> labels;            // empty = unlabeled
   };
   struct Keyframe {
+    std::size_t id;
     SE3d T_map_kf;
     Cloud corners;
     Cloud surfaces;
   };
+
+  // Stored keyframe with this id, or null (ids ascend along keyframes_).
+  template <typename Keyframes>
+  static auto* find_in(Keyframes& keyframes, std::size_t id) {
+    const auto it = std::lower_bound(keyframes.begin(), keyframes.end(), id,
+                                     [](const Keyframe& kf, std::size_t v) { return kf.id < v; });
+    return it != keyframes.end() && it->id == id ? &*it : nullptr;
+  }
+  Keyframe* find(std::size_t id) { return find_in(keyframes_, id); }
+  [[nodiscard]] const Keyframe* find(std::size_t id) const { return find_in(keyframes_, id); }
+
+  // Drops keyframes until at most max_keyframes remain: the farthest from
+  // center outside the radius (ties: the oldest), else the oldest.
+  void trim(const Eigen::Vector3d& center) {
+    if (config_.max_keyframes == 0) return;
+    while (keyframes_.size() > config_.max_keyframes) {
+      std::size_t drop = 0;
+      double farthest = -1.0;
+      for (std::size_t i = 0; i < keyframes_.size(); ++i) {
+        const double d = (keyframes_[i].T_map_kf.translation() - center).norm();
+        if (d > config_.radius_m && d > farthest) {
+          farthest = d;
+          drop = i;
+        }
+      }
+      keyframes_.erase(keyframes_.begin() + static_cast<std::ptrdiff_t>(drop));
+    }
+  }
 
   Cloud keep(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels,
              const char* what) const {
@@ -210,7 +262,7 @@ class LocalMap {
   void build_one(Cloud Keyframe::*member, double leaf_m, FeatureMap& map) const {
     std::vector<Eigen::Vector3f> merged;
     std::vector<Class> merged_labels;
-    for (const std::size_t k : active_) {
+    for (const std::size_t k : active_pos_) {
       const Keyframe& kf = keyframes_[k];
       const Cloud& cloud = kf.*member;
       const Eigen::Matrix3d R = kf.T_map_kf.rotation();
@@ -227,8 +279,10 @@ class LocalMap {
   }
 
   Config config_;
-  std::vector<Keyframe> keyframes_;
-  std::vector<std::size_t> active_;
+  std::vector<Keyframe> keyframes_;  // stored keyframes, ascending id
+  std::size_t next_id_ = 0;
+  std::vector<std::size_t> active_;      // ids of the last build's keyframes
+  std::vector<std::size_t> active_pos_;  // and their positions in keyframes_
   FeatureMap corners_{FeatureKind::kLine};
   FeatureMap surfaces_{FeatureKind::kPlane};
 };
