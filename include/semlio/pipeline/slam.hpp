@@ -76,11 +76,10 @@
 /// What still grows with the drive is bookkeeping: per keyframe the record
 /// (~0.3 kB), a graph node and two factors (~1 kB); per frame an index and
 /// two poses (~120 bytes): about 1.2 MB per km at 10 Hz and a keyframe per
-/// metre and a quarter. Not bounded here: the front end's LocalMap
-/// (map/local_map.hpp) keeps every keyframe's features and only builds its
-/// map from those within its radius, ~0.1 MB per keyframe (measured: the
-/// process's live heap grows ~65 MB per 1000 simulated frames while this
-/// store stays under its ceiling).
+/// metre and a quarter. The front end's LocalMap (map/local_map.hpp) has
+/// its own ceiling, LocalMapConfig::max_keyframes (~0.1 MB per keyframe;
+/// before it, the process's live heap grew ~65 MB per 1000 simulated frames
+/// while this store stayed under its ceiling).
 ///
 /// Cost per frame: the odometry plus, on keyframes, a voxel downsample, the
 /// loop detector (linear in keyframes, microseconds), the retirement of one
