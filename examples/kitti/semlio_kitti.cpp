@@ -413,6 +413,10 @@ int main(int argc, char** argv) {
     if (opt.deskew == "on") settings.deskew.mode = semlio::DeskewMode::kConstantVelocity;
     if (opt.deskew == "off") settings.deskew.mode = semlio::DeskewMode::kNone;
     const bool use_imu = opt.imu == "oxts";
+    // As semlio_lio: with an IMU, directions the solver finds weak stay at
+    // the IMU prediction instead of following the lidar's weak solution
+    // (README, lidar-inertial). Overrides the YAML's solver setting.
+    if (use_imu) settings.odometry.solver.reset_weak_directions = true;
     if (use_imu && back_end.slam.loop_closure) {
       throw semlio::ConfigError("--imu oxts runs lidar-inertial odometry without the pose-graph back end; "
                                 "--loop on (or YAML slam.loop_closure: true) is not supported with it");
