@@ -66,11 +66,7 @@ class ResidualFitCache {
       std::fill(filled_.begin(), filled_.end(), std::uint8_t{0});
       build_id_ = map.build_id();
     }
-    if (slot >= filled_.size()) {
-      keys_.resize(slot + 1);
-      models_.resize(slot + 1);
-      filled_.resize(slot + 1, 0);
-    }
+    if (slot >= filled_.size()) reserve(slot + 1);
     FeatureMatches& key = keys_[slot];
     if (filled_[slot] != 0 && same_points(key, m)) {
       ++hits_;

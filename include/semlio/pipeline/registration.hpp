@@ -66,7 +66,7 @@ inline void prepare_scan(Scan& scan, const RegistrationConfig& config) {
   if (scan.empty()) return;
   infer_rings(scan, config.sensor, config.rings);
   if (config.kitti_vertical_correction) {
-    for (auto& p : scan.points) p = correct_vertical_angle(p, kKittiVerticalCorrectionRad);
+    correct_kitti_vertical_angle(scan, kKittiVerticalCorrectionRad);
   }
 }
 
