@@ -33,6 +33,7 @@
 #include <semlio/imu/preintegration.hpp>
 #include <semlio/solve/gauss_newton.hpp>
 #include <semlio/graph/inertial_graph.hpp>
+#include <semlio/graph/keyframe_inertial_graph.hpp>
 #include <semlio/graph/pose_graph.hpp>
 
 #include <semlio/associate/nearest_k.hpp>
