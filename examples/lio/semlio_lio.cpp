@@ -155,8 +155,8 @@ int main(int argc, char** argv) {
                  "(none only where the solver froze the prediction)")
       ->check(CLI::IsMember({"none", "remapped"}));
   app.add_option("--reset-weak-directions", opt.reset_weak,
-                 "scan-to-map solver: directions flagged by the relative degeneracy test stay at the prediction "
-                 "(auto: on with --imu oxts)")
+                 "scan-to-map solver: directions flagged by the relative degeneracy test stay at the prediction, "
+                 "on frames with an IMU/INS prior or a constant-velocity-deskewed sweep (auto: on with --imu oxts)")
       ->check(CLI::IsMember({"auto", "on", "off"}));
   app.add_option("--velocity-factors", opt.velocity_factors,
                  "on: the OXTS velocity also constrains every inertial state (INS-aided)")
