@@ -10,6 +10,7 @@
 #include <semlio/keyframe/semantic_adaptive.hpp>
 #include <semlio/pipeline/interpolate.hpp>
 #include <semlio/pipeline/odometry.hpp>
+#include <semlio/pipeline/presets.hpp>
 #include <semlio/residual/point_to_line.hpp>
 #include <semlio/residual/point_to_plane.hpp>
 #include <semlio/residual/semantic_weighted.hpp>
@@ -169,4 +170,37 @@ TEST_CASE("Odometry uses an external pose prior and ignores a non-finite one", "
   // pose stays far from it — proof the prior replaced the prediction.
   const FrameReport far = run(SE3d(SO3d(), Eigen::Vector3d(4.0, 0.0, 0.0)));
   CHECK(far.T_map_lidar.translation().x() > 1.5);
+}
+
+TEST_CASE("Preset robust corners: off by default (plain point-to-line bit for bit), opt-in lengthens the KITTI step",
+          "[pipeline]") {
+  PipelineSettings settings;
+  settings.odometry.kitti_vertical_correction = true;
+  const auto run = [](auto odom) {
+    Scan a = kitti_scan(0, 0.0);
+    odom.process(a);
+    Scan b = kitti_scan(1, 0.1);
+    const FrameReport r = odom.process(b);
+    REQUIRE(finite(r.T_map_lidar));
+    return r.T_map_lidar;
+  };
+  const SE3d T_preset = run(make_baseline_odometry(ScanLabels{}, settings));
+  const SE3d T_plain = run(Odometry(ScanLabels{}, NearestK(settings.nearest),
+                                    LoamResiduals{PointToLine(settings.line), PointToPlane(settings.plane)},
+                                    PoseThreshold(settings.pose_threshold), settings.odometry,
+                                    SweepDeskew(settings.deskew)));
+  CHECK(T_preset.matrix() == T_plain.matrix());
+
+  // The measured corner bias shortens this step (README, Status); a 0.1 m
+  // Cauchy kernel on the corner terms takes its pull away.
+  settings.corner_cauchy_m = 0.1;
+  const SE3d T_robust = run(make_baseline_odometry(ScanLabels{}, settings));
+  INFO("plain x " << T_plain.translation().x() << ", robust x " << T_robust.translation().x());
+  CHECK(T_robust.translation().x() > T_plain.translation().x() + 0.005);
+  CHECK(T_robust.translation().x() == Approx(0.69).margin(0.03));
+
+  settings.corner_cauchy_m = -0.1;
+  CHECK_THROWS_AS(make_full_odometry(ScanLabels{}, settings), ConfigError);
+  settings.corner_cauchy_m = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS_AS(make_baseline_odometry(ScanLabels{}, settings), ConfigError);
 }
