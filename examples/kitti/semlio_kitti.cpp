@@ -9,7 +9,9 @@
 // sequence's KITTI raw oxts/ folder (a semlio_simulate drive writes one) and
 // Tr_imu_velo from calib.txt; deskew (YAML deskew.mode or --deskew on) is
 // then the LIO's IMU deskew to the sweep start. --imu none (default): the
-// lidar-only pipeline as before.
+// lidar-only pipeline as before. --imu oxts --loop on: the LIO is the front
+// end of the keyframe back end with inertial states (Slam with a
+// KeyframeInertialGraph: IMU factors between keyframes, loops).
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -90,6 +92,36 @@ struct ImuRunFacts {
   std::size_t rejected = 0;           // samples push_imu rejected (non-finite, not after the previous one)
   std::string last_issue;             // last fallback / rejection reason
   std::vector<char> fallback_frame;   // per frame
+  std::size_t imu_factors = 0;        // IMU factors in the keyframe graph (--loop on)
+};
+
+// Counts one LIO frame into the facts (frame index relative to --first).
+void count_lio_frame(ImuRunFacts& f, const semlio::LidarInertialReport& r, std::size_t frame) {
+  if (r.initialized && f.initialized_at < 0) f.initialized_at = static_cast<long>(frame);
+  f.imu_predicted += r.prediction == semlio::PredictionSource::kImu ? 1U : 0U;
+  f.fallbacks += r.imu_fallback ? 1U : 0U;
+  f.imu_deskewed += r.deskew == semlio::DeskewSource::kImu ? 1U : 0U;
+  f.fallback_frame.push_back(r.imu_fallback ? 1 : 0);
+  if (!r.imu_issue.empty()) f.last_issue = r.imu_issue;
+}
+
+// IMU input of a run: samples, INS velocities and the LIO's settings.
+struct ImuFeed {
+  const std::vector<semlio::ImuSample>& imu;
+  const std::vector<semlio_examples::OxtsVelocity>& velocities;
+  const semlio::LidarInertialConfig& lc;
+  std::size_t next = 0;    // next sample to push
+  std::size_t next_v = 0;  // next velocity to push
+
+  // Pushes everything up to the sweep's end (IMU clock) into `sink`.
+  template <typename Sink>
+  void feed(Sink& sink, double scan_stamp_s) {
+    const double until = scan_stamp_s + lc.imu_time_offset_s + lc.sweep_period_s + 1e-6;
+    while (next < imu.size() && imu[next].stamp_s <= until) sink.push_imu(imu[next++]);
+    for (; next_v < velocities.size() && velocities[next_v].stamp_s <= until; ++next_v) {
+      sink.push_velocity(velocities[next_v].stamp_s, velocities[next_v].v_imu_mps);
+    }
+  }
 };
 
 // Either shipped loop detector behind one type, so that each front end is
@@ -200,9 +232,12 @@ double percentile(std::vector<double> v, double q) {
   return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
 }
 
+// Front end + back end (Slam). With a lidar-inertial front end (--imu oxts
+// --loop on), `imu` feeds it before each scan.
 template <typename Odometry>
 RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool write_map,
-              const semlio::io::KittiSequence& seq, std::size_t first, std::size_t last, bool quiet) {
+              const semlio::io::KittiSequence& seq, std::size_t first, std::size_t last, bool quiet,
+              [[maybe_unused]] ImuFeed* imu = nullptr) {
   RunResult result;
   const std::size_t n = last - first + 1;
   result.reports.reserve(n);
@@ -216,7 +251,11 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
   for (std::size_t i = first; i <= last; ++i) {
     const double cpu_start_ms = thread_cpu_ms();
     semlio::Scan scan = seq.read(i);
+    if constexpr (decltype(slam)::kInertial) {
+      if (imu != nullptr) imu->feed(slam, scan.stamp_s);
+    }
     const semlio::SlamFrameReport r = slam.process(scan);
+    if constexpr (decltype(slam)::kInertial) count_lio_frame(result.imu, slam.odometry().last_report(), i - first);
     result.reports.push_back(r.odometry);
     result.back_end.push_back({r.loop_checked, r.loop_closed, r.backend_ms, r.total_ms, thread_cpu_ms() - cpu_start_ms});
     const std::size_t done = i - first + 1;
@@ -236,6 +275,15 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
   result.graph_full_ms = slam.graph_full_ms();
   result.graph_nodes = slam.graph().num_nodes();
   result.graph_factors = slam.graph().num_factors();
+  if constexpr (decltype(slam)::kInertial) {
+    result.imu.used = true;
+    result.imu.time_offset_s = slam.odometry().lio().config().imu_time_offset_s;
+    result.imu.samples = imu != nullptr ? imu->imu.size() : 0;
+    result.imu.imu_factors = slam.imu_factors();
+    result.imu.rejected = slam.odometry().lio().imu_rejected();
+    const std::string& why = slam.odometry().lio().last_imu_rejection();
+    if (!why.empty() && result.imu.last_issue.empty()) result.imu.last_issue = why;
+  }
   result.keyframe_bytes = slam.keyframe_bytes();
   result.place_bytes = slam.place_bytes();
   result.places = slam.places().size();
@@ -268,29 +316,18 @@ RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::v
   result.imu.samples = imu.size();
   semlio::LidarInertialOdometry lio(make, lc);
   const bool tty = !quiet && isatty(STDERR_FILENO) != 0;
-  std::size_t next = 0;
-  std::size_t next_v = 0;
+  ImuFeed feed{imu, velocities, lc};
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t i = first; i <= last; ++i) {
     const double cpu_start_ms = thread_cpu_ms();
     semlio::Scan scan = seq.read(i);
-    const double until = scan.stamp_s + lc.imu_time_offset_s + lc.sweep_period_s + 1e-6;
-    while (next < imu.size() && imu[next].stamp_s <= until) lio.push_imu(imu[next++]);
-    for (; next_v < velocities.size() && velocities[next_v].stamp_s <= until; ++next_v) {
-      lio.push_velocity(velocities[next_v].stamp_s, velocities[next_v].v_imu_mps);
-    }
+    feed.feed(lio, scan.stamp_s);
     const semlio::LidarInertialReport r = lio.process(scan);
     result.reports.push_back(r.frame);
     result.optimised.push_back(r.T_map_lidar);
     result.odometry.push_back(r.frame.T_map_lidar);
     result.back_end.push_back({false, false, 0.0, r.frame.timings.total_ms, thread_cpu_ms() - cpu_start_ms});
-    ImuRunFacts& f = result.imu;
-    if (r.initialized && f.initialized_at < 0) f.initialized_at = static_cast<long>(i - first);
-    f.imu_predicted += r.prediction == semlio::PredictionSource::kImu ? 1U : 0U;
-    f.fallbacks += r.imu_fallback ? 1U : 0U;
-    f.imu_deskewed += r.deskew == semlio::DeskewSource::kImu ? 1U : 0U;
-    f.fallback_frame.push_back(r.imu_fallback ? 1 : 0);
-    if (!r.imu_issue.empty()) f.last_issue = r.imu_issue;
+    count_lio_frame(result.imu, r, i - first);
     if (tty) show_progress(i - first + 1, n, start);
   }
   if (tty) std::fprintf(stderr, "\n");
@@ -336,7 +373,8 @@ int main(int argc, char** argv) {
   app.add_option("--out", opt.out, "output directory")->required();
   app.add_flag("--quiet", opt.quiet, "no progress line");
   app.add_option("--loop", opt.loop,
-                 "loop closure + pose graph (default off: poses.txt is then the odometry; YAML slam.loop_closure)")
+                 "loop closure + pose graph (with --imu oxts: keyframe graph with velocity/bias states and IMU factors; "
+                 "default off: poses.txt is then the odometry; YAML slam.loop_closure)")
       ->check(CLI::IsMember({"on", "off"}));
   app.add_option("--loop-detector", opt.loop_detector, "loop candidates: radius (LIO-SAM, default) or scancontext")
       ->check(CLI::IsMember({"radius", "scancontext"}));
@@ -345,7 +383,8 @@ int main(int argc, char** argv) {
   app.add_flag("--map-static", opt.map_static, "leave movable classes (cars, people, ...) out of map.ply");
   app.add_option("--imu", opt.imu,
                  "oxts: lidar-inertial odometry with the sequence's KITTI raw oxts/ folder and calib.txt's "
-                 "Tr_imu_velo; none (default): lidar only")
+                 "Tr_imu_velo (with --loop on: + keyframe graph with velocity/bias states, IMU factors "
+                 "and loops); none (default): lidar only")
       ->check(CLI::IsMember({"none", "oxts"}));
   app.add_option("--deskew", opt.deskew,
                  "deskew sweeps (raw data, --distortion on drives): on = the YAML's deskew settings with mode "
@@ -417,10 +456,9 @@ int main(int argc, char** argv) {
     // the IMU prediction instead of following the lidar's weak solution
     // (README, lidar-inertial). Overrides the YAML's solver setting.
     if (use_imu) settings.odometry.solver.reset_weak_directions = true;
-    if (use_imu && back_end.slam.loop_closure) {
-      throw semlio::ConfigError("--imu oxts runs lidar-inertial odometry without the pose-graph back end; "
-                                "--loop on (or YAML slam.loop_closure: true) is not supported with it");
-    }
+    // --imu oxts --loop on: the LIO feeds the keyframe graph with inertial
+    // states (run() with LidarInertialFrontEnd); --loop off: the LIO alone.
+    const bool lio_back_end = use_imu && back_end.slam.loop_closure;
 
     // IMU (--imu oxts): samples, extrinsic, clock offset; deskew moves into the LIO.
     std::vector<semlio::ImuSample> imu;
@@ -465,6 +503,14 @@ int main(int argc, char** argv) {
     const bool geometric = opt.labels == "geometric";
     const bool use_labels = geometric || (opt.labels != "none" && seq.has_labels());
     const auto run_preset = [&](auto segmenter) {
+      if (lio_back_end) {
+        ImuFeed feed{imu, velocities, lc};
+        return opt.preset == "baseline"
+                   ? run(semlio::LidarInertialFrontEnd([&] { return semlio::make_baseline_odometry(segmenter, settings); }, lc),
+                         back_end, write_map, seq, first, last_u, opt.quiet, &feed)
+                   : run(semlio::LidarInertialFrontEnd([&] { return semlio::make_full_odometry(segmenter, settings); }, lc),
+                         back_end, write_map, seq, first, last_u, opt.quiet, &feed);
+      }
       if (use_imu) {
         return opt.preset == "baseline"
                    ? run_lio([&] { return semlio::make_baseline_odometry(segmenter, settings); }, lc, imu, velocities, seq, first,
@@ -516,7 +562,7 @@ int main(int argc, char** argv) {
     semlio::io::write_tum_trajectory((out / "poses_tum.txt").string(), tum);
     semlio::io::write_kitti_poses((out / "poses_odom.txt").string(),
                                   Tr ? semlio::io::lidar_to_camera(poses_odom, *Tr) : poses_odom);
-    if (write_map && !use_imu) semlio::io::write_ply((out / "map.ply").string(), result.map);
+    if (write_map && (!use_imu || lio_back_end)) semlio::io::write_ply((out / "map.ply").string(), result.map);
     {
       std::ofstream kf(out / "keyframes.txt");
       kf.precision(9);
@@ -649,10 +695,10 @@ int main(int argc, char** argv) {
         j.field("initialized_at_frame", static_cast<long long>(f.initialized_at < 0 ? -1 : f.initialized_at + static_cast<long>(first)));
         j.field("imu_predicted_frames", f.imu_predicted).field("fallback_frames", f.fallbacks);
         j.field("imu_deskewed_frames", f.imu_deskewed).field("rejected_samples", f.rejected);
-        j.field("last_issue", f.last_issue);
+        j.field("last_issue", f.last_issue).field("graph_imu_factors", f.imu_factors);
         j.end_object();
       }
-      if (write_map && !use_imu) {
+      if (write_map && (!use_imu || lio_back_end)) {
         j.key("map").begin_object();
         j.field("points", result.map.size()).field("leaf_size_m", back_end.map.leaf_size_m);
         j.field("static_only", back_end.map.drop_dynamic).end_object();

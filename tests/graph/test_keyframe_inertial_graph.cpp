@@ -121,6 +121,13 @@ TEST_CASE("keyframe inertial graph: hand-checked between and IMU residuals", "[g
   cov.diagonal().array() += h.config().min_variance;
   const double expected = 0.25 * cov.inverse()(8, 8);
   CHECK(h.chi2() == Approx(expected).epsilon(1e-9));
+  // imu_information_scale weighs the IMU (and bias walk) information.
+  KeyframeInertialGraph scaled({.imu_information_scale = 1e-3});
+  scaled.add_node(0.0, NavState{}, ImuBias{});
+  scaled.add_node(1.0, up, ImuBias{});
+  scaled.add_imu(0, 1, pim);
+  CHECK(scaled.chi2() == Approx(1e-3 * expected).epsilon(1e-9));
+  CHECK_THROWS_AS(KeyframeInertialGraph({.imu_information_scale = 0.0}), ConfigError);
 }
 
 TEST_CASE("keyframe inertial graph: exact states with noise-free IMU are a fixed point", "[graph]") {

@@ -4,4 +4,5 @@ set(SEMLIO_TESTS_imu_inertial
   imu/test_inertial_init.cpp
   imu/test_lidar_inertial.cpp
   imu/test_lio_deskew.cpp
+  imu/test_lio_slam.cpp
   imu/test_oxts_fallback.cpp)

@@ -63,6 +63,10 @@ struct KeyframeInertialGraphConfig {
   double huber_delta = 4.0;             ///< robust loops: Huber threshold on sqrt(e^T Omega e)
   double singular_pivot_ratio = 1e-14;  ///< LDL^T pivot / max pivot below this = singular
   double min_variance = 1e-14;          ///< floor of IMU and bias-walk variances (noise-free configs)
+  /// Multiplies the IMU and bias-walk information: 1 = the preintegration's
+  /// white-noise covariance; < 1 leaves room for what it does not model (an
+  /// estimated gravity direction and bias, states taken from a front end).
+  double imu_information_scale = 1.0;
   SE3d T_imu_sensor = SE3d();           ///< sensor (lidar) -> IMU extrinsic of between / loop measurements
   ErrorConvention convention{};         ///< between-error convention (between_error.hpp)
 };
@@ -89,6 +93,9 @@ class KeyframeInertialGraph {
     if (!(config_.huber_delta > 0.0))
       throw ConfigError("KeyframeInertialGraphConfig.huber_delta: must be > 0, got " +
                         std::to_string(config_.huber_delta));
+    if (!(config_.imu_information_scale > 0.0) || !std::isfinite(config_.imu_information_scale))
+      throw ConfigError("KeyframeInertialGraphConfig.imu_information_scale: must be finite and > 0, got " +
+                        std::to_string(config_.imu_information_scale));
     if (!config_.T_imu_sensor.matrix().allFinite())
       throw ConfigError("KeyframeInertialGraphConfig.T_imu_sensor: not finite");
   }
@@ -131,7 +138,7 @@ class KeyframeInertialGraph {
     cov.diagonal().array() += config_.min_variance;
     Eigen::Matrix<double, 6, 6> bias_cov = pim.bias_walk_covariance();
     bias_cov.diagonal().array() += config_.min_variance;
-    Imu f{pim, cov.inverse(), bias_cov.inverse()};
+    Imu f{pim, config_.imu_information_scale * cov.inverse(), config_.imu_information_scale * bias_cov.inverse()};
     f.information = 0.5 * (f.information + f.information.transpose()).eval();
     check_finite(f.information.allFinite() && f.bias_information.allFinite(), "add_imu");
     imus_.push_back(f);
