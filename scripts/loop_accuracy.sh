@@ -14,6 +14,11 @@
 # ONE_RUN=1 (skip the separate --loop off run: the --loop on run's
 # poses_odom.txt is the same odometry), KEEP_SCANS=1 (keep DRIVE/velodyne).
 # Prints the ATE of both runs and their ratio; exits 1 when the ratio > 0.5.
+# Then scripts/loop_oracle.py on the same run: the same graph with every
+# accepted loop measured from the ground truth, i.e. what any back end could
+# reach with these loops (how much of the odometry's error they observe).
+# The drive where the odometry really drifts (6.8 m in height at the end):
+#   TRAFFIC=heavy LABELS=predictions PRESET=baseline scripts/loop_accuracy.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FRAMES=${FRAMES:-2000}
@@ -34,7 +39,7 @@ DRIVE=${DRIVE:-$OUT/drive}
 
 if [ -z "${SKIP_BUILD:-}" ]; then
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
-  cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_simulate semlio_kitti
+  cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_simulate semlio_kitti semlio_pgo semlio_eval
 fi
 if [ ! -f "$DRIVE/sim.json" ] || [ ! -d "$DRIVE/velodyne" ]; then
   "$BUILD_DIR/examples/semlio_simulate" --world urban --traffic "$TRAFFIC" --frames "$FRAMES" --seed "$SEED" \
@@ -102,5 +107,9 @@ print(f"== ATE RMSE with loop closure:  {ate_on:.3f} m")
 print(f"== ratio {ratio:.3f} (must be <= 0.5): {'PASS' if ratio <= 0.5 else 'FAIL'}")
 sys.exit(0 if ratio <= 0.5 else 1)
 PY
+if [ -x "$BUILD_DIR/examples/semlio_pgo" ] && [ -x "$BUILD_DIR/examples/semlio_eval" ]; then
+  echo "== oracle (the run's loops measured from the ground truth):"
+  /usr/bin/python3 scripts/loop_oracle.py --run "$OUT/loop_on" --gt "$DRIVE/poses.txt" --build "$BUILD_DIR" || true
+fi
 if [ -z "${KEEP_SCANS:-}" ] && [ "$DRIVE" = "$OUT/drive" ]; then rm -rf "$DRIVE/velodyne"; fi
 exit $status
