@@ -273,4 +273,21 @@ TEST_CASE("Robust kernels give the IRLS weight of the current residual", "[resid
   const auto outer = huber.evaluate(far, flat, SE3d());
   CHECK(outer.r == inner.r);
   CHECK(outer.J_r_xi == inner.J_r_xi);
+
+  SECTION("widening: scale max(own, s); infinity is plain least squares, 0 restores") {
+    semlio::Robust<semlio::Cauchy, semlio::PointToPlane> wide(semlio::Cauchy{.c_m = 0.1});
+    CHECK(wide.set_min_scale_m(0.5));  // 1 / (1 + 0.25 / 0.25)
+    CHECK(wide.evaluate(far, flat, SE3d()).weight == Approx(0.5));
+    CHECK_FALSE(wide.set_min_scale_m(0.05));  // narrower than its own: own scale
+    CHECK(wide.evaluate(far, flat, SE3d()).weight == Approx(1.0 / 26.0));
+    CHECK(wide.set_min_scale_m(std::numeric_limits<double>::infinity()));
+    CHECK(wide.evaluate(far, flat, SE3d()).weight == 1.0);
+    CHECK_FALSE(wide.set_min_scale_m(0.0));
+    CHECK(wide.evaluate(far, flat, SE3d()).weight == cauchy.evaluate(far, flat, SE3d()).weight);
+    // Through SemanticWeighted, as the full preset nests it.
+    semlio::SemanticWeighted<semlio::Robust<semlio::Cauchy, semlio::PointToPlane>> nested(wide);
+    CHECK(nested.set_min_scale_m(std::numeric_limits<double>::infinity()));
+    CHECK(nested.evaluate(far, flat, SE3d()).weight ==
+          semlio::SemanticWeighted<semlio::PointToPlane>{}.evaluate(far, flat, SE3d()).weight);
+  }
 }

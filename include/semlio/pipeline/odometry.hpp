@@ -12,6 +12,7 @@
 #include <cmath>
 #include <concepts>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -243,7 +244,13 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     GaussNewtonConfig solver = config_.solver;
     solver.reset_weak_directions =
         solver.reset_weak_directions && (has_prior || reset == WeakDirectionReset::kAlways);
+    // Robust kernels need a start near the answer (residual/robust.hpp): the
+    // first frame after the start has no motion estimate (its prediction is
+    // the last pose while the vehicle may move a metre), so it solves plain.
+    const bool no_motion_estimate = !has_prior && processed_ < 2;
+    problem_.set_min_robust_scale_m(no_motion_estimate ? std::numeric_limits<double>::infinity() : 0.0);
     report.solve = gauss_newton(problem_, T, solver);
+    problem_.set_min_robust_scale_m(0.0);
     const auto [cm, sm] = problem_.matched_counts();
     report.corner_matches = cm;
     report.surface_matches = sm;

@@ -96,6 +96,17 @@ class ScanToMapProblem {
     accumulate(*surfaces_, surface_matches_, *surface_map_, residuals_.surface, surface_fits_, T_map_scan, eq);
   }
 
+  /// Widens the robust kernels of both residuals to at least s [m]
+  /// (residual/robust.hpp; infinity: plain least squares, 0: their own
+  /// scales); residuals without a robust kernel ignore it. Returns whether a
+  /// kernel is now wider than its own scale.
+  bool set_min_robust_scale_m(double s) {
+    bool widened = false;
+    if constexpr (requires { residuals_.corner.set_min_scale_m(s); }) widened |= residuals_.corner.set_min_scale_m(s);
+    if constexpr (requires { residuals_.surface.set_min_scale_m(s); }) widened |= residuals_.surface.set_min_scale_m(s);
+    return widened;
+  }
+
   /// Correspondences of the last association, per corner feature.
   [[nodiscard]] const Correspondences& corner_matches() const noexcept { return corner_matches_; }
   /// Correspondences of the last association, per surface feature.

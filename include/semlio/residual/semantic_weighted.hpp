@@ -60,6 +60,13 @@ class SemanticWeighted {
     return weighted(feature, matches, inner_.evaluate(feature, matches, model, T_map_scan));
   }
 
+  /// Forwards a robust inner residual's widening (residual/robust.hpp).
+  bool set_min_scale_m(double s)
+    requires requires(R& r) { r.set_min_scale_m(s); }
+  {
+    return inner_.set_min_scale_m(s);
+  }
+
   /// The wrapped residual.
   [[nodiscard]] const R& inner() const noexcept { return inner_; }
 
