@@ -131,18 +131,29 @@ def main():
     ap.add_argument("--odometry-sigma-rad", type=float, default=1.4e-5, help="odometry edge sigma, rotation [rad]")
     args = ap.parse_args()
 
+    for name in ("poses_odom.txt", "poses.txt", "keyframes.txt", "report.json"):
+        if not os.path.isfile(os.path.join(args.run, name)):
+            sys.exit(f"{os.path.join(args.run, name)}: missing (expected a semlio_kitti --loop on output directory)")
+    if not os.path.isfile(args.gt):
+        sys.exit(f"{args.gt}: missing ground-truth pose file")
     gt = read_kitti(args.gt)
     odom = read_kitti(os.path.join(args.run, "poses_odom.txt"))
     optimised = read_kitti(os.path.join(args.run, "poses.txt"))
     with open(os.path.join(args.run, "keyframes.txt")) as f:
         keyframes = [int(line.split()[0]) for line in f if line.strip() and not line.startswith("#")]
     with open(os.path.join(args.run, "report.json")) as f:
-        loops = [(l["from_frame"], l["to_frame"]) for l in json.load(f)["loop"]["loops"]]
-    if len(odom) != len(gt):
-        sys.exit(f"poses_odom.txt has {len(odom)} poses, the ground truth {len(gt)}: pass the matching --gt")
+        report = json.load(f)
+    if "loop" not in report or "loops" not in report["loop"]:
+        sys.exit(f"{args.run}/report.json has no loop section: run semlio_kitti with --loop on")
+    loops = [(l["from_frame"], l["to_frame"]) for l in report["loop"]["loops"]]
+    if len(odom) != len(gt) or len(optimised) != len(gt):
+        sys.exit(f"poses_odom.txt / poses.txt have {len(odom)} / {len(optimised)} poses, the ground truth "
+                 f"{len(gt)}: pass the matching --gt")
     if not loops:
         sys.exit("the run accepted no loops: nothing to compare")
     node = {frame: k for k, frame in enumerate(keyframes)}
+    if any(f < 0 or f >= len(gt) for f in keyframes) or any(a not in node or b not in node for a, b in loops):
+        sys.exit(f"{args.run}: keyframes.txt and report.json's loops do not match (a loop frame is not a keyframe)")
 
     with tempfile.TemporaryDirectory() as work:
         graph = os.path.join(work, "oracle.g2o")
