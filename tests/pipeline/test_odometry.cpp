@@ -172,10 +172,12 @@ TEST_CASE("Odometry uses an external pose prior and ignores a non-finite one", "
   CHECK(far.T_map_lidar.translation().x() > 1.5);
 }
 
-TEST_CASE("Preset robust corners: off by default (plain point-to-line bit for bit), opt-in lengthens the KITTI step",
+TEST_CASE("Preset robust corners: on by default (first frame plain, the KITTI step lengthened), 0 = plain point-to-line",
           "[pipeline]") {
   PipelineSettings settings;
   settings.odometry.kitti_vertical_correction = true;
+  CHECK(settings.corner_cauchy_m > 0.0);
+  CHECK(settings.odometry.solver.damp_degenerate);
   const auto run = [](auto odom, const std::optional<SE3d>& prior = std::nullopt) {
     Scan a = kitti_scan(0, 0.0);
     odom.process(a);
@@ -184,14 +186,10 @@ TEST_CASE("Preset robust corners: off by default (plain point-to-line bit for bi
     REQUIRE(finite(r.T_map_lidar));
     return r.T_map_lidar;
   };
-  const SE3d T_preset = run(make_baseline_odometry(ScanLabels{}, settings));
   const SE3d T_plain = run(Odometry(ScanLabels{}, NearestK(settings.nearest),
                                     LoamResiduals{PointToLine(settings.line), PointToPlane(settings.plane)},
                                     PoseThreshold(settings.pose_threshold), settings.odometry,
                                     SweepDeskew(settings.deskew)));
-  CHECK(T_preset.matrix() == T_plain.matrix());
-
-  settings.corner_cauchy_m = 0.1;
   // The first frame after the start has no motion estimate (its prediction
   // is 0.69 m behind): the kernel is widened away and it solves plain.
   const SE3d T_first = run(make_baseline_odometry(ScanLabels{}, settings));
@@ -202,6 +200,17 @@ TEST_CASE("Preset robust corners: off by default (plain point-to-line bit for bi
   INFO("plain x " << T_plain.translation().x() << ", robust x " << T_robust.translation().x());
   CHECK(T_robust.translation().x() > T_plain.translation().x() + 0.005);
   CHECK(T_robust.translation().x() == Approx(0.69).margin(0.03));
+
+  // Scale 0 is LIO-SAM's plain point-to-line, bit for bit, from any start.
+  settings.corner_cauchy_m = 0.0;
+  const SE3d T_off = run(make_baseline_odometry(ScanLabels{}, settings), T_plain);
+  const SE3d T_plain_prior = run(Odometry(ScanLabels{}, NearestK(settings.nearest),
+                                          LoamResiduals{PointToLine(settings.line), PointToPlane(settings.plane)},
+                                          PoseThreshold(settings.pose_threshold), settings.odometry,
+                                          SweepDeskew(settings.deskew)),
+                                 T_plain);
+  CHECK(T_off.matrix() == T_plain_prior.matrix());
+  CHECK(T_off.translation().x() < T_robust.translation().x() - 0.005);
 
   settings.corner_cauchy_m = -0.1;
   CHECK_THROWS_AS(make_full_odometry(ScanLabels{}, settings), ConfigError);

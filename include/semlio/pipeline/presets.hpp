@@ -6,27 +6,24 @@
 /// semantic keyframes). Both carry a SweepDeskew (imu/deskew.hpp), off
 /// unless PipelineSettings::deskew switches it on.
 ///
-/// Robust corners (opt-in, PipelineSettings::corner_cauchy_m; off by
-/// default). The corner residual of both presets is Robust<Cauchy,
-/// PointToLine>; with the default scale 0 the Cauchy weight is exactly 1, so
-/// the terms, and the results, are LIO-SAM's plain point-to-line bit for bit.
-/// Why offered: a few corner matches pair a feature with a line it does not
-/// lie on (horizontal ground lines near the car, edges on adjacent rings
-/// matched to one near-horizontal map line) and keep 0.3-0.9 m residuals at
-/// the right pose; squared, they pull the motion short (real KITTI pair: 3.1
-/// cm short of a plane ICP's 0.69 m; 0.55 cm with a 0.1 m kernel). In
-/// odometry a 0.1 m kernel, with GaussNewtonConfig::damp_degenerate on (the
-/// down-weighted corners push the forward eigenvalue under LIO-SAM's
-/// absolute threshold, and frozen there the full preset lost track), halves
-/// the ATE of both presets on simulated drives without traffic and improves
-/// the real KITTI raw snippet's forward/backward agreement. A robust kernel
-/// wants a start near the answer: the first frame after the start has no
-/// motion estimate, and in heavy traffic the full preset then ended 1 m short
-/// for good (the forward direction, carried by corners alone there, kept
-/// information 42 instead of 812); Odometry therefore solves that frame plain
-/// (Robust::set_min_scale_m), which fixed it (0.176 -> 0.023 m). Not the
-/// default yet: every published number would change, and it is measured on
-/// four simulated drives and one real snippet (README, Status).
+/// Robust corners (default; PipelineSettings::corner_cauchy_m = 0.1 m, 0
+/// turns them off). The corner residual of both presets is Robust<Cauchy,
+/// PointToLine>; at scale 0 the Cauchy weight is exactly 1 and the terms are
+/// LIO-SAM's plain point-to-line bit for bit. Why on: a few corner matches
+/// pair a feature with a line it does not lie on (horizontal ground lines
+/// near the car, edges on adjacent rings matched to one near-horizontal map
+/// line) and keep 0.3-0.9 m residuals at the right pose; squared, they pull
+/// the motion short (real KITTI pair: 3.1 cm short of a plane ICP's 0.69 m;
+/// 0.55 cm with a 0.1 m kernel). Down-weighted corners can push the forward
+/// eigenvalue under LIO-SAM's absolute degeneracy threshold, and frozen there
+/// the full preset lost track, so the presets damp degenerate directions
+/// instead of freezing them (GaussNewtonConfig::damp_degenerate on). A robust
+/// kernel wants a start near the answer: the first frame after the start has
+/// no motion estimate, and in heavy traffic the full preset then ended 1 m
+/// short for good; Odometry therefore solves that frame plain
+/// (Robust::set_min_scale_m). Measured (README, Status): the ATE of both
+/// presets halves on simulated drives with and without traffic, and the real
+/// KITTI raw snippet's forward/backward runs agree better.
 
 #include <cmath>
 #include <limits>
@@ -47,13 +44,21 @@
 
 namespace semlio {
 
+/// The presets' pipeline settings: OdometryConfig's defaults, with
+/// degenerate directions damped rather than frozen (file comment).
+inline OdometryConfig preset_odometry_config() {
+  OdometryConfig c;
+  c.solver.damp_degenerate = true;
+  return c;
+}
+
 /// Every setting of both presets (unused parts are ignored by a preset).
 struct PipelineSettings {
-  OdometryConfig odometry{};                   ///< shared pipeline settings
+  OdometryConfig odometry = preset_odometry_config(); ///< shared pipeline settings (degenerate directions damped)
   NearestKConfig nearest{};                    ///< baseline association
   NormalConsistencyConfig normal{};            ///< full association (Algorithm 1)
   PointToLineConfig line{};                    ///< corner residual
-  double corner_cauchy_m = 0.0;                ///< Cauchy kernel scale on corner terms [m]; 0 = off, plain least squares (file comment)
+  double corner_cauchy_m = 0.1;                ///< Cauchy kernel scale on corner terms [m]; 0 = off, plain least squares (file comment)
   PointToPlaneConfig plane{};                  ///< surface residual
   PoseThresholdConfig pose_threshold{};        ///< baseline keyframes
   SemanticAdaptiveConfig semantic_keyframes{}; ///< full keyframes (eq. 14-22)
