@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
   std::string sensor = "hdl64e";
   std::string correction = "off";
   double ring_check_deg = 0.0;
-  double robust_corners_m = 0.0;
+  double robust_corners_m = 0.1;  // the presets' default (pipeline/presets.hpp)
   CLI::App app{"semlio_register: scan-to-scan registration with semlio's front end"};
   app.add_option("--source", source_path, "scan to move (.bin, .pcd, .ply)")->required();
   app.add_option("--target", target_path, "reference scan (.bin, .pcd, .ply)")->required();
@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"on", "off"}));
   app.add_option("--ring-check", ring_check_deg, "corner lines within this angle of the scan cone are dropped [deg], 0 = off")
       ->check(CLI::Range(0.0, 89.0));
-  app.add_option("--robust-corners", robust_corners_m, "Cauchy kernel scale on corner terms [m], 0 = off")
+  app.add_option("--robust-corners", robust_corners_m, "Cauchy kernel scale on corner terms [m] (default 0.1, as the odometry presets), 0 = off")
       ->check(CLI::Range(0.0, 10.0));
   try {
     app.parse(argc, argv);

@@ -165,6 +165,34 @@ TEST_CASE("Registration of the real 32-beam scan pair from identity", "[pipeline
   }
 }
 
+TEST_CASE("Registration of the real 32-beam scan pair with robust corners (semlio_register's default)",
+          "[pipeline][registration]") {
+  // Robust corners bring the translation 4-8x closer to the reference, and
+  // leave the rotation 0.25-0.31 deg from it, mostly roll: inside the spread
+  // of independent estimators on this pair (plane_icp above, run on it,
+  // lands 0.14-0.49 deg from the reference depending on its voxel sizes;
+  // small_gicp's GICP 0.33 deg). NormalConsistency with semantic
+  // weights, semlio_register's default, is inside issue #4's 0.25 deg; the
+  // NearestK variant is not (README, Status).
+  const SE3d T_ref = read_matrix4(semlio_test::data_path("scan_pair/T_target_source.txt"));
+  RegistrationConfig config;
+  config.sensor = SensorModel::hdl32e();
+  for (const bool normal : {true, false}) {
+    Scan source = io::read_ply(semlio_test::data_path("scan_pair/source.ply"));
+    Scan target = io::read_ply(semlio_test::data_path("scan_pair/target.ply"));
+    const RegistrationResult r =
+        normal ? register_scan(source, target, SE3d(), NormalConsistency{}, kWeightedRobust, config)
+               : register_scan(source, target, SE3d(), NearestK{}, kPlainRobust, config);
+    INFO((normal ? "NormalConsistency" : "NearestK") << ": " << distance_m(r.T_target_source, T_ref) << " m, "
+                                                     << angle_deg(r.T_target_source, T_ref) << " deg");
+    REQUIRE(r.solve.ok());
+    CHECK(distance_m(r.T_target_source, T_ref) < 0.01);
+    CHECK(angle_deg(r.T_target_source, T_ref) < (normal ? 0.25 : 0.35));
+    CHECK(r.inliers() > 1000);
+    CHECK_FALSE(r.solve.degenerate());
+  }
+}
+
 TEST_CASE("Registration of two consecutive real KITTI scans agrees with an independent plane ICP",
           "[pipeline][registration]") {
   const auto path = [](int i) {
