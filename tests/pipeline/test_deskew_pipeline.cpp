@@ -130,7 +130,7 @@ TEST_CASE("SweepDeskew off is a no-op and leaves the presets' poses unchanged", 
   REQUIRE(st.deskew.mode == DeskewMode::kNone);
   auto preset = semlio::make_baseline_odometry(semlio::NoLabels{}, st);
   semlio::Odometry plain(semlio::NoLabels{}, semlio::NearestK(st.nearest),
-                         semlio::LoamResiduals{semlio::PointToLine(st.line), semlio::PointToPlane(st.plane)},
+                         semlio::LoamResiduals{semlio::preset_corner_residual(st), semlio::PointToPlane(st.plane)},
                          semlio::PoseThreshold(st.pose_threshold), st.odometry);
   for (int i = 0; i < 3; ++i) {
     Scan a = semlio::io::read_pcd(raw_scan(i));
