@@ -48,6 +48,10 @@ for kind, scene in scenes:
     ref_s = f"{ref:14.2f}" if ref is not None else f"{'-':>14}"
     print(f"{kind:<10}{scene:<18}{nk:13.2f}{nc:16.2f}{ref_s}{r1:13.2f}{r2:9.1f}")
 print("targets: NC/NearestK <= 2.0 (stretch 1.5), Ref/NC >= 10 ->", "met" if ok else "NOT met")
+ref, fast = cpu_ms("DownsampleLabelled/reference/merged_map"), cpu_ms("DownsampleLabelled/radix/merged_map")
+if ref is not None and fast is not None:
+    print(f"map rebuild voxel downsampling, merged map input: reference {ref:.1f} ms, radix {fast:.1f} ms, "
+          f"speed-up {ref / fast:.2f}x")
 PY
 
 if [[ "${NO_GN:-0}" != 1 ]]; then

@@ -2,7 +2,8 @@
 // NormalConsistencyReference, on a real KITTI scan (000001) against a local
 // map built from the neighbouring real scan (000000), on two consecutive
 // simulated urban sweeps (semlio::sim, in memory) and on the synthetic
-// street; plus the per-frame preparation, the local-map build, and residual +
+// street; plus the per-frame preparation, the local-map build and its voxel
+// downsampling (radix sort against its reference), and residual +
 // Jacobian accumulation into 6x6 normal equations. Items = scan features.
 // scripts/bench_association.sh runs this and prints the ratios.
 #include <benchmark/benchmark.h>
@@ -16,6 +17,7 @@
 #include <semlio/associate/nearest_k.hpp>
 #include <semlio/associate/normal_consistency.hpp>
 #include <semlio/associate/normal_consistency_reference.hpp>
+#include <semlio/io/kitti.hpp>
 #include <semlio/map/local_map.hpp>
 #include <semlio/residual/point_to_line.hpp>
 #include <semlio/residual/point_to_plane.hpp>
@@ -163,6 +165,43 @@ void BM_LocalMapBuild(benchmark::State& state, bool dense) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(points));
 }
 
+// The map rebuild's voxel downsampling on a merged map-sized input: 40
+// copies of the real KITTI scan 000000 (every 8th point), each 0.8 m further
+// and 0.01 rad turned, ~0.6 M points at the corner leaf (0.2 m). Reference
+// (sort of (key, index) pairs) against the radix sort with a reused workspace.
+const std::vector<Eigen::Vector3f>& merged_map_input() {
+  static const std::vector<Eigen::Vector3f> merged = [] {
+    const semlio::Scan scan =
+        semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+    std::vector<Eigen::Vector3f> out;
+    for (int k = 0; k < 40; ++k) {
+      const Eigen::Matrix3f R =
+          Eigen::AngleAxisf(0.01F * static_cast<float>(k), Eigen::Vector3f::UnitZ()).toRotationMatrix();
+      for (std::size_t i = 0; i < scan.points.size(); i += 8) {
+        out.push_back(R * scan.points[i] + Eigen::Vector3f(0.8F * static_cast<float>(k), 0.0F, 0.0F));
+      }
+    }
+    return out;
+  }();
+  return merged;
+}
+
+void BM_DownsampleLabelled(benchmark::State& state, bool reference) {
+  const std::vector<Eigen::Vector3f>& in = merged_map_input();
+  std::vector<Eigen::Vector3f> out;
+  std::vector<semlio::Class> labels;
+  semlio::detail::DownsampleWorkspace ws;
+  for (auto _ : state) {
+    if (reference) {
+      semlio::detail::downsample_labelled_reference(in, {}, 0.2, out, labels);
+    } else {
+      semlio::detail::downsample_labelled(in, {}, 0.2, out, labels, ws);
+    }
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(in.size()));
+}
+
 // Residual + Jacobian accumulation (H = sum w J^T J, g = sum w J^T r) over the
 // NormalConsistency matches of the KITTI surfaces: one Gauss-Newton build.
 template <typename R>
@@ -230,6 +269,10 @@ int main(int argc, char** argv) {
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("LocalMapBuild/kitti_features", BM_LocalMapBuild, false)->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("LocalMapBuild/kitti_dense", BM_LocalMapBuild, true)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("DownsampleLabelled/reference/merged_map", BM_DownsampleLabelled, true)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("DownsampleLabelled/radix/merged_map", BM_DownsampleLabelled, false)
+      ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("Accumulate/PointToPlane", BM_Accumulate<semlio::PointToPlane>)
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("Accumulate/SemanticWeighted<PointToPlane>",

@@ -11,12 +11,14 @@
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <set>
 #include <thread>
 #include <cstddef>
 #include <vector>
 
 #include <semlio/associate/nearest_k.hpp>
 #include <semlio/core/error.hpp>
+#include <semlio/io/kitti.hpp>
 #include <semlio/map/feature_map.hpp>
 #include <semlio/map/feature_terms.hpp>
 #include <semlio/map/local_map.hpp>
@@ -75,6 +77,65 @@ TEST_CASE("Voxel downsampling keeps centroids and majority labels", "[map]") {
   CHECK(out_labels[1] == Class::kRoad);
   CHECK(out[2].isApprox(Eigen::Vector3f(1.25F, 0.1F, 0.1F)));
   CHECK(out_labels[2] == Class::kCar);
+}
+
+TEST_CASE("Voxel downsampling (radix sort) equals its reference bit for bit", "[map]") {
+  // The fast path must choose the same voxels, sum their points in the same
+  // order and vote the same labels as the straightforward sort of (key,
+  // index) pairs: on a real KITTI scan merged from shifted, turned copies (a
+  // map rebuild's input), with and without labels, with non-finite points,
+  // points beyond +-2^20 leaves, exact duplicates and label ties.
+  const semlio::Scan scan = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  std::mt19937 rng(7);
+  std::vector<Eigen::Vector3f> merged;
+  std::vector<Class> labels;
+  for (int k = 0; k < 6; ++k) {
+    const Eigen::Matrix3f R = Eigen::AngleAxisf(0.02F * static_cast<float>(k), Eigen::Vector3f::UnitZ()).toRotationMatrix();
+    for (std::size_t i = 0; i < scan.points.size(); i += 3) {
+      merged.push_back(R * scan.points[i] + Eigen::Vector3f(0.8F * static_cast<float>(k), 0.05F, 0.0F));
+      labels.push_back(semlio::class_from_index(static_cast<int>(rng() % 4U)));
+    }
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  for (const Eigen::Vector3f& odd : {Eigen::Vector3f(nan, 0.0F, 0.0F), Eigen::Vector3f(0.0F, inf, 1.0F),
+                                     Eigen::Vector3f(3.0e5F, 0.0F, 0.0F), Eigen::Vector3f(-3.0e5F, 1.0F, 1.0F),
+                                     Eigen::Vector3f(1.01F, 2.01F, 0.01F), Eigen::Vector3f(1.01F, 2.01F, 0.01F)}) {
+    merged.push_back(odd);
+    labels.push_back(Class::kCar);
+  }
+  for (const double leaf : {0.2, 0.4, 1.0}) {
+    for (const bool labelled : {true, false}) {
+      const std::vector<Class> in_labels = labelled ? labels : std::vector<Class>{};
+      std::vector<Eigen::Vector3f> ref, fast;
+      std::vector<Class> ref_labels, fast_labels;
+      semlio::detail::downsample_labelled_reference(merged, in_labels, leaf, ref, ref_labels);
+      semlio::detail::DownsampleWorkspace ws;
+      for (int call = 0; call < 2; ++call) {  // the second call reuses the workspace
+        semlio::detail::downsample_labelled(merged, in_labels, leaf, fast, fast_labels, ws);
+        INFO("leaf " << leaf << ", labelled " << labelled << ", call " << call);
+        REQUIRE(fast.size() == ref.size());
+        CHECK(fast_labels == ref_labels);
+        std::size_t same = 0;
+        for (std::size_t i = 0; i < ref.size(); ++i) same += (fast[i].array() == ref[i].array()).all() ? 1U : 0U;
+        CHECK(same == ref.size());
+      }
+      CHECK(ref.size() > 1000);
+      // Majority votes were exercised: some voxel holds more than one label.
+      if (labelled) CHECK(std::set<Class>(ref_labels.begin(), ref_labels.end()).size() == 4);
+    }
+  }
+  // Degenerate inputs: nothing valid, and everything in one voxel.
+  std::vector<Eigen::Vector3f> out{Eigen::Vector3f::Ones()};
+  std::vector<Class> out_labels{Class::kCar};
+  semlio::detail::downsample_labelled({Eigen::Vector3f(nan, nan, nan)}, {}, 0.4, out, out_labels);
+  CHECK(out.empty());
+  CHECK(out_labels.empty());
+  semlio::detail::downsample_labelled({Eigen::Vector3f(0.1F, 0.1F, 0.1F), Eigen::Vector3f(0.3F, 0.1F, 0.1F)}, {}, 0.4,
+                                      out, out_labels);
+  REQUIRE(out.size() == 1);
+  CHECK(out[0].isApprox(Eigen::Vector3f(0.2F, 0.1F, 0.1F)));
+  CHECK(out_labels == std::vector<Class>{Class::kUnlabeled});
 }
 
 TEST_CASE("LocalMap selects keyframes by radius and moves them into the map frame", "[map]") {

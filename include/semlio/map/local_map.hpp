@@ -60,13 +60,15 @@ struct LocalMapConfig {
 
 namespace detail {
 
-/// Voxel-grid downsampling with labels: one output point per occupied voxel
+/// Voxel-grid downsampling with labels, the straightforward reference of
+/// downsample_labelled (same contract, same output bit for bit; kept for the
+/// test that proves it and the benchmark that times both): one output point per occupied voxel
 /// of edge `leaf_m`, at the centroid of its points, carrying the voxel's
 /// majority label (ties: the lowest class id). Output order is by voxel key,
 /// so the result does not depend on the input order. Non-finite points and
 /// points beyond +-2^20 leaves from the origin are dropped. labels may be
 /// empty (all unlabeled).
-inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points,
+inline void downsample_labelled_reference(const std::vector<Eigen::Vector3f>& points,
                                 const std::vector<Class>& labels, double leaf_m,
                                 std::vector<Eigen::Vector3f>& out_points,
                                 std::vector<Class>& out_labels) {
@@ -110,6 +112,132 @@ inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points,
     out_labels.push_back(class_from_index(static_cast<int>(best - votes.begin())));
     b = e;
   }
+}
+
+/// One point of downsample_labelled's radix sort.
+struct VoxelEntry {
+  std::uint64_t key;   // cell relative to the cloud's lowest cell, packed (see downsample_labelled)
+  Eigen::Vector3f p;   // the point
+  Class label;         // its label
+};
+
+/// Buffers of downsample_labelled, reusable across calls (a map rebuild sorts
+/// tens of megabytes; fresh buffers would page-fault them in every time).
+struct DownsampleWorkspace {
+  std::vector<VoxelEntry> entries;  ///< valid points with their packed cell keys
+  std::vector<VoxelEntry> swap;     ///< the radix sort's second buffer
+};
+
+/// Voxel-grid downsampling with labels: one output point per occupied voxel
+/// of edge `leaf_m`, at the centroid of its points, carrying the voxel's
+/// majority label (ties: the lowest class id). Output order is by voxel key,
+/// so the result does not depend on the input order. Non-finite points and
+/// points beyond +-2^20 leaves from the origin are dropped. labels may be
+/// empty (all unlabeled).
+///
+/// Why not a comparison sort: a keyframe's map rebuild merges every keyframe
+/// within the map radius (0.5-1 M points on a simulated street), and sorting
+/// (key, index) pairs plus the summing that follows took 37 % of a simulated
+/// drive's CPU time (baseline preset, perf). Here the voxel
+/// coordinates are taken relative to the cloud's bounding cells and packed
+/// in only as many bits as its extent needs (~30 for a 50 m map at 0.2 m), sorted
+/// by a stable LSD radix sort (10-bit digits) that carries each point and
+/// label along, so the per-voxel sums then read memory in order. Stability
+/// keeps equal keys in input order, which is the order in which the
+/// reference (a sort of (key, index) pairs) sums them: the output is the
+/// reference's bit for bit (test). Measured on 623k points (60 shifted
+/// copies of a real KITTI scan, 0.2 m leaf): 23 ms against the reference's
+/// 63 ms with a reused workspace.
+inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels,
+                                double leaf_m, std::vector<Eigen::Vector3f>& out_points,
+                                std::vector<Class>& out_labels, DownsampleWorkspace& ws) {
+  constexpr double kHalf = 1048576.0;  // 2^20 leaves each side of the origin, as the reference
+  const double inv_leaf = 1.0 / leaf_m;
+  // The points the reference keeps: finite, within +-2^20 leaves.
+  const auto cell_of = [inv_leaf](const Eigen::Vector3f& p, std::array<std::int32_t, 3>& c) {
+    if (!p.allFinite()) return false;
+    for (int a = 0; a < 3; ++a) {
+      const double v = std::floor(static_cast<double>(p[a]) * inv_leaf);
+      if (!(v >= -kHalf && v < kHalf)) return false;
+      c[static_cast<std::size_t>(a)] = static_cast<std::int32_t>(v);
+    }
+    return true;
+  };
+  std::array<std::int32_t, 3> lo{}, hi{}, c{};
+  std::size_t n = 0;
+  for (const Eigen::Vector3f& p : points) {
+    if (!cell_of(p, c)) continue;
+    if (n++ == 0) lo = hi = c;
+    for (std::size_t a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], c[a]);
+      hi[a] = std::max(hi[a], c[a]);
+    }
+  }
+  out_points.clear();
+  out_labels.clear();
+  if (n == 0) return;
+
+  // Lexicographic (x, y, z) cell order, as the reference's 21-bit packing.
+  std::array<int, 3> bits{};
+  for (std::size_t a = 0; a < 3; ++a) {
+    const auto span = static_cast<std::uint32_t>(hi[a] - lo[a]);
+    while (bits[a] < 32 && (span >> bits[a]) != 0U) ++bits[a];
+  }
+  std::vector<VoxelEntry>& entries = ws.entries;
+  std::vector<VoxelEntry>& swap = ws.swap;
+  entries.resize(n);
+  swap.resize(n);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!cell_of(points[i], c)) continue;
+    std::uint64_t key = 0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      key = (key << bits[a]) | static_cast<std::uint64_t>(static_cast<std::uint32_t>(c[a] - lo[a]));
+    }
+    entries[k++] = VoxelEntry{key, points[i], labels.empty() ? Class::kUnlabeled : labels[i]};
+  }
+  constexpr int kDigit = 10;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
+  const int total_bits = bits[0] + bits[1] + bits[2];
+  std::array<std::size_t, kBuckets> offset{};
+  for (int shift = 0; shift < total_bits; shift += kDigit) {
+    offset.fill(0);
+    for (const VoxelEntry& e : entries) ++offset[(e.key >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (std::size_t& o : offset) sum += std::exchange(o, sum);
+    for (const VoxelEntry& e : entries) swap[offset[(e.key >> shift) & (kBuckets - 1)]++] = e;
+    entries.swap(swap);
+  }
+
+  std::size_t b = 0;
+  while (b < n) {
+    std::size_t e = b;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    bool one_label = true;
+    while (e < n && entries[e].key == entries[b].key) {
+      sum += entries[e].p.cast<double>();
+      one_label = one_label && entries[e].label == entries[b].label;
+      ++e;
+    }
+    out_points.push_back((sum / static_cast<double>(e - b)).cast<float>());
+    if (one_label) {
+      out_labels.push_back(entries[b].label);
+    } else {
+      std::array<std::uint32_t, kNumClasses> votes{};
+      for (std::size_t j = b; j < e; ++j) ++votes[static_cast<std::size_t>(index(entries[j].label))];
+      const auto best = std::max_element(votes.begin(), votes.end());  // first maximum: lowest id
+      out_labels.push_back(class_from_index(static_cast<int>(best - votes.begin())));
+    }
+    b = e;
+  }
+}
+
+/// downsample_labelled with buffers of its own (one-off calls, tests).
+inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels,
+                                double leaf_m, std::vector<Eigen::Vector3f>& out_points,
+                                std::vector<Class>& out_labels) {
+  DownsampleWorkspace ws;
+  downsample_labelled(points, labels, leaf_m, out_points, out_labels, ws);
 }
 
 }  // namespace detail
@@ -259,9 +387,11 @@ class LocalMap {
     return c;
   }
 
-  void build_one(Cloud Keyframe::*member, double leaf_m, FeatureMap& map) const {
-    std::vector<Eigen::Vector3f> merged;
-    std::vector<Class> merged_labels;
+  void build_one(Cloud Keyframe::*member, double leaf_m, FeatureMap& map) {
+    std::vector<Eigen::Vector3f>& merged = merged_;
+    std::vector<Class>& merged_labels = merged_labels_;
+    merged.clear();
+    merged_labels.clear();
     for (const std::size_t k : active_pos_) {
       const Keyframe& kf = keyframes_[k];
       const Cloud& cloud = kf.*member;
@@ -274,7 +404,7 @@ class LocalMap {
     }
     std::vector<Eigen::Vector3f> points;
     std::vector<Class> labels;
-    detail::downsample_labelled(merged, merged_labels, leaf_m, points, labels);
+    detail::downsample_labelled(merged, merged_labels, leaf_m, points, labels, downsample_ws_);
     map.build(std::move(points), std::move(labels), config_.shape_neighbours, config_.candidate_list);
   }
 
@@ -285,6 +415,12 @@ class LocalMap {
   std::vector<std::size_t> active_pos_;  // and their positions in keyframes_
   FeatureMap corners_{FeatureKind::kLine};
   FeatureMap surfaces_{FeatureKind::kPlane};
+  // Rebuild buffers, kept between builds: a rebuild merges and sorts tens of
+  // megabytes, and fresh buffers page-faulted them in every time (~40 % of
+  // the downsampling's time). They hold ~40 MB on a full 50 m map.
+  std::vector<Eigen::Vector3f> merged_;
+  std::vector<Class> merged_labels_;
+  detail::DownsampleWorkspace downsample_ws_;
 };
 
 }  // namespace semlio
