@@ -138,6 +138,76 @@ TEST_CASE("Voxel downsampling (radix sort) equals its reference bit for bit", "[
   CHECK(out_labels == std::vector<Class>{Class::kUnlabeled});
 }
 
+TEST_CASE("LocalMap rebuilds by merging equal a from-scratch downsampling bit for bit", "[map]") {
+  // A drive along x: a keyframe every 3 m, a 20 m radius, so each build
+  // gains a newer keyframe and loses old ones (the merge path); then a
+  // corrected pose and a return to the start (full rebuilds), and a map
+  // capped at max_keyframes. After every build both maps must equal the
+  // reference downsampling of the active keyframes merged in id order.
+  const semlio_test::KittiFeatures f = semlio_test::kitti_features("kitti/sequences/00/velodyne/000000.bin");
+  semlio_test::FeatureCloud corners = f.corners;
+  corners.labels.clear();
+  for (std::size_t i = 0; i < corners.points.size(); ++i) corners.labels.push_back(semlio::class_from_index(static_cast<int>(i % 3)));
+  const semlio_test::FeatureCloud& surfaces = f.surfaces;  // unlabeled
+  for (const std::size_t cap : {std::size_t{0}, std::size_t{5}}) {
+    semlio::LocalMapConfig config;
+    config.radius_m = 20.0;
+    config.max_keyframes = cap;
+    LocalMap map(config);
+    std::vector<SE3d> poses;
+    const auto expect = [&](const LocalMap& m) {
+      for (const bool corner : {true, false}) {
+        const semlio_test::FeatureCloud& cloud = corner ? corners : surfaces;
+        std::vector<Eigen::Vector3f> merged;
+        std::vector<Class> labels;
+        for (const std::size_t id : m.active_keyframes()) {
+          const SE3d& T = poses[id];
+          for (std::size_t i = 0; i < cloud.points.size(); ++i) {
+            merged.push_back((T.rotation() * cloud.points[i].cast<double>() + T.translation()).cast<float>());
+            labels.push_back(cloud.labels.empty() ? Class::kUnlabeled : cloud.labels[i]);
+          }
+        }
+        std::vector<Eigen::Vector3f> ref;
+        std::vector<Class> ref_labels;
+        semlio::detail::downsample_labelled_reference(merged, labels, corner ? config.corner_leaf_m : config.surface_leaf_m,
+                                                      ref, ref_labels);
+        const semlio::FeatureMap& fm = corner ? m.corners() : m.surfaces();
+        INFO((corner ? "corners" : "surfaces") << ", cap " << cap << ", active " << m.active_keyframes().size());
+        REQUIRE(fm.points().size() == ref.size());
+        CHECK(fm.points() == ref);
+        CHECK(fm.labels() == ref_labels);
+      }
+    };
+    const auto add = [&](const SE3d& T) {
+      poses.push_back(T);
+      map.add_keyframe(T, corners, surfaces);
+      map.build(T.translation());
+      expect(map);
+    };
+    for (int k = 0; k < 12; ++k) {
+      add(SE3d(semlio::SO3d::exp(Eigen::Vector3d(0.0, 0.0, 0.01 * k)), Eigen::Vector3d(3.0 * k, 0.2 * k, 0.0)));
+      CHECK(map.last_build_merged() == (k > 0));  // the first build has nothing to merge into
+    }
+    CHECK(map.active_keyframes().size() < 12);  // old keyframes left the radius
+    // A corrected pose of an active keyframe (a loop closure would do this).
+    const std::size_t last = map.active_keyframes().back();
+    poses[last] = SE3d(semlio::SO3d(), poses[last].translation() + Eigen::Vector3d(0.0, 0.3, 0.0));
+    map.set_keyframe_pose(last, poses[last]);
+    map.build(poses[last].translation());
+    CHECK_FALSE(map.last_build_merged());
+    expect(map);
+    // Back at the start: early keyframes (lower ids) become active again.
+    add(SE3d(semlio::SO3d(), Eigen::Vector3d(1.0, 0.5, 0.0)));
+    if (cap == 0) {
+      CHECK(map.active_keyframes().front() == 0);
+      CHECK_FALSE(map.last_build_merged());
+    }
+    // A step back: no older keyframe enters, the new one is merged in.
+    add(SE3d(semlio::SO3d(), Eigen::Vector3d(0.0, 0.5, 0.0)));
+    CHECK(map.last_build_merged());
+  }
+}
+
 TEST_CASE("LocalMap selects keyframes by radius and moves them into the map frame", "[map]") {
   LocalMap map({.radius_m = 50.0, .corner_leaf_m = 0.2, .surface_leaf_m = 0.4});
   const FeatureCloud plane = plane_patch(Class::kRoad);

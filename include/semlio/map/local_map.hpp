@@ -114,101 +114,62 @@ inline void downsample_labelled_reference(const std::vector<Eigen::Vector3f>& po
   }
 }
 
-/// One point of downsample_labelled's radix sort.
-struct VoxelEntry {
-  std::uint64_t key;   // cell relative to the cloud's lowest cell, packed (see downsample_labelled)
-  Eigen::Vector3f p;   // the point
-  Class label;         // its label
+/// One point of a LocalMap rebuild: its voxel key as
+/// downsample_labelled_reference packs it (21 bits per axis), its keyframe,
+/// the point in the map frame and its label.
+struct MapEntry {
+  std::uint64_t key;
+  std::size_t keyframe;
+  Eigen::Vector3f p;
+  Class label;
 };
 
-/// Buffers of downsample_labelled, reusable across calls (a map rebuild sorts
-/// tens of megabytes; fresh buffers would page-fault them in every time).
-struct DownsampleWorkspace {
-  std::vector<VoxelEntry> entries;  ///< valid points with their packed cell keys
-  std::vector<VoxelEntry> swap;     ///< the radix sort's second buffer
-};
+/// The reference's voxel key of p (leaf given as its inverse [1/m]); false
+/// for the points it drops (non-finite, beyond +-2^20 leaves).
+inline bool reference_voxel_key(const Eigen::Vector3f& p, double inv_leaf, std::uint64_t& key) {
+  constexpr double kHalf = 1048576.0;
+  if (!p.allFinite()) return false;
+  key = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double v = std::floor(static_cast<double>(p[a]) * inv_leaf);
+    if (!(v >= -kHalf && v < kHalf)) return false;
+    key = (key << 21U) | static_cast<std::uint64_t>(static_cast<std::int64_t>(v) + (std::int64_t{1} << 20));
+  }
+  return true;
+}
 
-/// Voxel-grid downsampling with labels: one output point per occupied voxel
-/// of edge `leaf_m`, at the centroid of its points, carrying the voxel's
-/// majority label (ties: the lowest class id). Output order is by voxel key,
-/// so the result does not depend on the input order. Non-finite points and
-/// points beyond +-2^20 leaves from the origin are dropped. labels may be
-/// empty (all unlabeled).
-///
-/// Why not a comparison sort: a keyframe's map rebuild merges every keyframe
-/// within the map radius (0.5-1 M points on a simulated street), and sorting
-/// (key, index) pairs plus the summing that follows took 37 % of a simulated
-/// drive's CPU time (baseline preset, perf). Here the voxel
-/// coordinates are taken relative to the cloud's bounding cells and packed
-/// in only as many bits as its extent needs (~30 for a 50 m map at 0.2 m), sorted
-/// by a stable LSD radix sort (10-bit digits) that carries each point and
-/// label along, so the per-voxel sums then read memory in order. Stability
-/// keeps equal keys in input order, which is the order in which the
-/// reference (a sort of (key, index) pairs) sums them: the output is the
-/// reference's bit for bit (test). Measured on 623k points (60 shifted
-/// copies of a real KITTI scan, 0.2 m leaf): 23 ms against the reference's
-/// 63 ms with a reused workspace.
-inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels,
-                                double leaf_m, std::vector<Eigen::Vector3f>& out_points,
-                                std::vector<Class>& out_labels, DownsampleWorkspace& ws) {
-  constexpr double kHalf = 1048576.0;  // 2^20 leaves each side of the origin, as the reference
-  const double inv_leaf = 1.0 / leaf_m;
-  // The points the reference keeps: finite, within +-2^20 leaves.
-  const auto cell_of = [inv_leaf](const Eigen::Vector3f& p, std::array<std::int32_t, 3>& c) {
-    if (!p.allFinite()) return false;
-    for (int a = 0; a < 3; ++a) {
-      const double v = std::floor(static_cast<double>(p[a]) * inv_leaf);
-      if (!(v >= -kHalf && v < kHalf)) return false;
-      c[static_cast<std::size_t>(a)] = static_cast<std::int32_t>(v);
-    }
-    return true;
-  };
-  std::array<std::int32_t, 3> lo{}, hi{}, c{};
-  std::size_t n = 0;
-  for (const Eigen::Vector3f& p : points) {
-    if (!cell_of(p, c)) continue;
-    if (n++ == 0) lo = hi = c;
-    for (std::size_t a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], c[a]);
-      hi[a] = std::max(hi[a], c[a]);
-    }
-  }
-  out_points.clear();
-  out_labels.clear();
-  if (n == 0) return;
-
-  // Lexicographic (x, y, z) cell order, as the reference's 21-bit packing.
-  std::array<int, 3> bits{};
-  for (std::size_t a = 0; a < 3; ++a) {
-    const auto span = static_cast<std::uint32_t>(hi[a] - lo[a]);
-    while (bits[a] < 32 && (span >> bits[a]) != 0U) ++bits[a];
-  }
-  std::vector<VoxelEntry>& entries = ws.entries;
-  std::vector<VoxelEntry>& swap = ws.swap;
-  entries.resize(n);
-  swap.resize(n);
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!cell_of(points[i], c)) continue;
-    std::uint64_t key = 0;
-    for (std::size_t a = 0; a < 3; ++a) {
-      key = (key << bits[a]) | static_cast<std::uint64_t>(static_cast<std::uint32_t>(c[a] - lo[a]));
-    }
-    entries[k++] = VoxelEntry{key, points[i], labels.empty() ? Class::kUnlabeled : labels[i]};
-  }
-  constexpr int kDigit = 10;
+/// Stable LSD radix sort of entries by key (11-bit digits; a digit equal in
+/// every key costs one histogram and no pass). The result is in `entries`.
+inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEntry>& scratch) {
+  constexpr int kDigit = 11;
+  constexpr int kPasses = 6;  // 66 >= 63 key bits
   constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
-  const int total_bits = bits[0] + bits[1] + bits[2];
-  std::array<std::size_t, kBuckets> offset{};
-  for (int shift = 0; shift < total_bits; shift += kDigit) {
-    offset.fill(0);
-    for (const VoxelEntry& e : entries) ++offset[(e.key >> shift) & (kBuckets - 1)];
+  const std::size_t n = entries.size();
+  if (n < 2) return;
+  std::vector<std::array<std::size_t, kBuckets>> count(kPasses);
+  for (auto& c : count) c.fill(0);
+  for (const MapEntry& e : entries) {
+    for (int d = 0; d < kPasses; ++d) ++count[static_cast<std::size_t>(d)][(e.key >> (d * kDigit)) & (kBuckets - 1)];
+  }
+  scratch.resize(n);
+  for (int d = 0; d < kPasses; ++d) {
+    auto& offset = count[static_cast<std::size_t>(d)];
+    if (std::find(offset.begin(), offset.end(), n) != offset.end()) continue;  // one bucket holds all
     std::size_t sum = 0;
     for (std::size_t& o : offset) sum += std::exchange(o, sum);
-    for (const VoxelEntry& e : entries) swap[offset[(e.key >> shift) & (kBuckets - 1)]++] = e;
-    entries.swap(swap);
+    const int shift = d * kDigit;
+    for (const MapEntry& e : entries) scratch[offset[(e.key >> shift) & (kBuckets - 1)]++] = e;
+    entries.swap(scratch);
   }
+}
 
+/// Centroid (points summed in entry order) and majority label (ties: the
+/// lowest class id) of each run of equal keys in key-sorted entries.
+inline void emit_voxels(const std::vector<MapEntry>& entries, std::vector<Eigen::Vector3f>& out_points,
+                        std::vector<Class>& out_labels) {
+  out_points.clear();
+  out_labels.clear();
+  const std::size_t n = entries.size();
   std::size_t b = 0;
   while (b < n) {
     std::size_t e = b;
@@ -230,6 +191,42 @@ inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points, cons
     }
     b = e;
   }
+}
+
+/// Buffers of downsample_labelled, reusable across calls (a map-sized input
+/// is tens of megabytes; fresh buffers would page-fault them in every time).
+struct DownsampleWorkspace {
+  std::vector<MapEntry> entries;  ///< the kept points with their voxel keys
+  std::vector<MapEntry> scratch;  ///< the radix sort's second buffer
+};
+
+/// Voxel-grid downsampling with labels: one output point per occupied voxel
+/// of edge `leaf_m`, at the centroid of its points, carrying the voxel's
+/// majority label (ties: the lowest class id). Output order is by voxel key,
+/// so the result does not depend on the input order. Non-finite points and
+/// points beyond +-2^20 leaves from the origin are dropped. labels may be
+/// empty (all unlabeled).
+///
+/// Why not a comparison sort (the reference): sorting (key, index) pairs of
+/// a map-sized input and then summing the points in that order reads them
+/// at random; here a stable LSD radix sort carries each point and label
+/// along with its key, so the per-voxel sums read memory in order.
+/// Stability keeps equal keys in input order, the order in which the
+/// reference sums them: the output is the reference's bit for bit (test).
+/// Measured on 0.6 M points (bench_association, DownsampleLabelled/*): about
+/// half the reference's time with a reused workspace.
+inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels,
+                                double leaf_m, std::vector<Eigen::Vector3f>& out_points,
+                                std::vector<Class>& out_labels, DownsampleWorkspace& ws) {
+  const double inv_leaf = 1.0 / leaf_m;
+  ws.entries.clear();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    std::uint64_t key = 0;
+    if (!reference_voxel_key(points[i], inv_leaf, key)) continue;
+    ws.entries.push_back(MapEntry{key, 0, points[i], labels.empty() ? Class::kUnlabeled : labels[i]});
+  }
+  radix_sort_by_key(ws.entries, ws.scratch);
+  emit_voxels(ws.entries, out_points, out_labels);
 }
 
 /// downsample_labelled with buffers of its own (one-off calls, tests).
@@ -289,7 +286,10 @@ class LocalMap {
       throw ValueError("LocalMap::set_keyframe_pose: keyframe " + std::to_string(id) + " of " +
                        std::to_string(next_id_));
     }
-    if (Keyframe* kf = find(id)) kf->T_map_kf = T_map_kf;
+    if (Keyframe* kf = find(id)) {
+      kf->T_map_kf = T_map_kf;
+      merged_corners_.valid = merged_surfaces_.valid = false;  // its entries moved: full rebuild
+    }
   }
 
   /// Number of keyframes added so far (ids issued), stored or dropped.
@@ -316,10 +316,13 @@ class LocalMap {
         active_pos_.push_back(i);
       }
     }
-    build_one(&Keyframe::corners, config_.corner_leaf_m, corners_);
-    build_one(&Keyframe::surfaces, config_.surface_leaf_m, surfaces_);
+    build_one(&Keyframe::corners, config_.corner_leaf_m, corners_, merged_corners_);
+    build_one(&Keyframe::surfaces, config_.surface_leaf_m, surfaces_, merged_surfaces_);
   }
 
+  /// True when the last build() merged its keyframe changes into the
+  /// previous build's sorted points (both maps) instead of re-sorting all.
+  [[nodiscard]] bool last_build_merged() const noexcept { return merged_corners_.merged && merged_surfaces_.merged; }
   /// Ids of the keyframes used by the last build(), ascending.
   [[nodiscard]] const std::vector<std::size_t>& active_keyframes() const noexcept { return active_; }
   /// The corner (line) map of the last build().
@@ -387,24 +390,69 @@ class LocalMap {
     return c;
   }
 
-  void build_one(Cloud Keyframe::*member, double leaf_m, FeatureMap& map) {
-    std::vector<Eigen::Vector3f>& merged = merged_;
-    std::vector<Class>& merged_labels = merged_labels_;
-    merged.clear();
-    merged_labels.clear();
-    for (const std::size_t k : active_pos_) {
-      const Keyframe& kf = keyframes_[k];
+  // The key-sorted entries of one map's last build (see build_one()).
+  struct MergedMap {
+    std::vector<detail::MapEntry> entries;  // (key, keyframe order, point order)
+    std::vector<detail::MapEntry> scratch;
+    std::vector<detail::MapEntry> fresh;
+    std::vector<std::size_t> ids;  // the keyframes they hold, ascending
+    bool valid = false;
+    bool merged = false;  // the last build took the merge path
+  };
+
+  // Merges the active keyframes' clouds, voxel-downsamples them and builds
+  // the FeatureMap. The result is downsample_labelled_reference's over the
+  // active keyframes in ascending id order: its (key, merged index) sort
+  // order is kept in m.entries between builds. Usually the active set only
+  // gains keyframes newer than all it held (and loses some), so a build
+  // drops the entries of keyframes that left, sorts the new ones and merges
+  // them in (std::merge keeps the held entries first on equal keys, as their
+  // ids are lower): linear in the map instead of a sort of it. A keyframe
+  // that comes back, or a corrected pose, makes a full rebuild.
+  void build_one(Cloud Keyframe::*member, double leaf_m, FeatureMap& map, MergedMap& m) {
+    const double inv_leaf = 1.0 / leaf_m;
+    const auto append = [&](const Keyframe& kf, std::vector<detail::MapEntry>& out) {
       const Cloud& cloud = kf.*member;
       const Eigen::Matrix3d R = kf.T_map_kf.rotation();
       const Eigen::Vector3d& t = kf.T_map_kf.translation();
       for (std::size_t i = 0; i < cloud.points.size(); ++i) {
-        merged.push_back((R * cloud.points[i].cast<double>() + t).cast<float>());
-        merged_labels.push_back(cloud.labels.empty() ? Class::kUnlabeled : cloud.labels[i]);
+        const Eigen::Vector3f p = (R * cloud.points[i].cast<double>() + t).cast<float>();
+        std::uint64_t key = 0;
+        if (!detail::reference_voxel_key(p, inv_leaf, key)) continue;
+        out.push_back(detail::MapEntry{key, kf.id, p, cloud.labels.empty() ? Class::kUnlabeled : cloud.labels[i]});
       }
+    };
+    const auto held = [&m](std::size_t id) { return std::binary_search(m.ids.begin(), m.ids.end(), id); };
+    bool incremental = m.valid;
+    for (const std::size_t id : active_) {
+      if (incremental && !m.ids.empty() && id < m.ids.back() && !held(id)) incremental = false;
     }
+    if (incremental) {
+      if (!std::includes(active_.begin(), active_.end(), m.ids.begin(), m.ids.end())) {
+        std::erase_if(m.entries, [this](const detail::MapEntry& e) {
+          return !std::binary_search(active_.begin(), active_.end(), e.keyframe);
+        });
+      }
+      m.fresh.clear();
+      for (const std::size_t k : active_pos_) {
+        if (!held(keyframes_[k].id)) append(keyframes_[k], m.fresh);
+      }
+      detail::radix_sort_by_key(m.fresh, m.scratch);
+      m.scratch.resize(m.entries.size() + m.fresh.size());
+      std::merge(m.entries.begin(), m.entries.end(), m.fresh.begin(), m.fresh.end(), m.scratch.begin(),
+                 [](const detail::MapEntry& x, const detail::MapEntry& y) { return x.key < y.key; });
+      m.entries.swap(m.scratch);
+    } else {
+      m.entries.clear();
+      for (const std::size_t k : active_pos_) append(keyframes_[k], m.entries);
+      detail::radix_sort_by_key(m.entries, m.scratch);
+    }
+    m.ids = active_;
+    m.valid = true;
+    m.merged = incremental;
     std::vector<Eigen::Vector3f> points;
     std::vector<Class> labels;
-    detail::downsample_labelled(merged, merged_labels, leaf_m, points, labels, downsample_ws_);
+    detail::emit_voxels(m.entries, points, labels);
     map.build(std::move(points), std::move(labels), config_.shape_neighbours, config_.candidate_list);
   }
 
@@ -415,12 +463,10 @@ class LocalMap {
   std::vector<std::size_t> active_pos_;  // and their positions in keyframes_
   FeatureMap corners_{FeatureKind::kLine};
   FeatureMap surfaces_{FeatureKind::kPlane};
-  // Rebuild buffers, kept between builds: a rebuild merges and sorts tens of
-  // megabytes, and fresh buffers page-faulted them in every time (~40 % of
-  // the downsampling's time). They hold ~40 MB on a full 50 m map.
-  std::vector<Eigen::Vector3f> merged_;
-  std::vector<Class> merged_labels_;
-  detail::DownsampleWorkspace downsample_ws_;
+  // Sorted entries of the last build, per map (~25 MB each on a full 50 m
+  // map, with their buffers; kept so that the next build is a merge).
+  MergedMap merged_corners_;
+  MergedMap merged_surfaces_;
 };
 
 }  // namespace semlio
