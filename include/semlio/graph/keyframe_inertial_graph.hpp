@@ -78,6 +78,13 @@ struct KeyframeInertialNode {
   ImuBias bias;          ///< IMU bias
 };
 
+/// One preintegrated IMU factor of a KeyframeInertialGraph (for diagnostics).
+struct KeyframeImuFactor {
+  NodeId from = 0;         ///< node i
+  NodeId to = 0;           ///< node j
+  ImuPreintegration pim;   ///< preintegration over [t_i, t_j] (its gravity, linearisation bias and covariance)
+};
+
 /// Keyframe graph over inertial states (see the file comment).
 class KeyframeInertialGraph {
  public:
@@ -138,7 +145,7 @@ class KeyframeInertialGraph {
     cov.diagonal().array() += config_.min_variance;
     Eigen::Matrix<double, 6, 6> bias_cov = pim.bias_walk_covariance();
     bias_cov.diagonal().array() += config_.min_variance;
-    Imu f{pim, config_.imu_information_scale * cov.inverse(), config_.imu_information_scale * bias_cov.inverse()};
+    Imu f{{i, j, pim}, config_.imu_information_scale * cov.inverse(), config_.imu_information_scale * bias_cov.inverse()};
     f.information = 0.5 * (f.information + f.information.transpose()).eval();
     check_finite(f.information.allFinite() && f.bias_information.allFinite(), "add_imu");
     imus_.push_back(f);
@@ -193,6 +200,14 @@ class KeyframeInertialGraph {
   [[nodiscard]] std::size_t num_factors() const noexcept { return factors_.size(); }
   /// Number of IMU factors.
   [[nodiscard]] std::size_t num_imu_factors() const noexcept { return imus_.size(); }
+  /// IMU factor k (0 <= k < num_imu_factors(), in the order added; ValueError otherwise).
+  [[nodiscard]] const KeyframeImuFactor& imu_factor(std::size_t k) const {
+    if (k >= imus_.size()) {
+      throw ValueError("KeyframeInertialGraph::imu_factor: " + std::to_string(k) + " of " +
+                       std::to_string(imus_.size()) + " IMU factors");
+    }
+    return imus_[k].factor;
+  }
   /// True when the next update() will be a full solve.
   [[nodiscard]] bool full_solve_pending() const noexcept { return pending_full_ || nodes_.size() <= config_.window_size; }
   /// Settings.
@@ -218,7 +233,7 @@ class KeyframeInertialGraph {
     bool robust;
   };
   struct Imu {
-    ImuPreintegration pim;
+    KeyframeImuFactor factor;
     Matrix9d information;
     Eigen::Matrix<double, 6, 6> bias_information;
   };
@@ -305,7 +320,7 @@ class KeyframeInertialGraph {
       }
       case Kind::imu: {
         const Imu& m = imus_[f.index];
-        const Vector9d r = imu_factor_error(m.pim, x[f.from].state, x[f.from].bias, x[f.to].state);
+        const Vector9d r = imu_factor_error(m.factor.pim, x[f.from].state, x[f.from].bias, x[f.to].state);
         const Eigen::Matrix<double, 6, 1> rb = bias_walk_error(x[f.from].bias, x[f.to].bias);
         return r.dot(m.information * r) + rb.dot(m.bias_information * rb);
       }
@@ -401,7 +416,7 @@ class KeyframeInertialGraph {
       } else {
         const Imu& m = imus_[f.index];
         Linear<9> l;
-        l.r = imu_factor_error(m.pim, a.state, a.bias, b.state, &l.J_from, &l.J_to);
+        l.r = imu_factor_error(m.factor.pim, a.state, a.bias, b.state, &l.J_from, &l.J_to);
         l.W = m.information;
         Linear<6> lb_walk;
         Matrix6x15d Bi;

@@ -504,7 +504,12 @@ class Slam {
         graph_.add_between(prev, node, T_odom_kf_.back().inverse() * T_odom_lidar, odometry_information(r));
         if (s && prev_inertial_) {
           const KeyframeInertialNode& p = graph_.node(prev);
-          const Eigen::Vector3d g_world = R_world_odom * odometry_.gravity_map_mps2();
+          // Gravity is a constant of the world frame, which is the front end's
+          // map frame (the first keyframe's prior holds it there): the map's
+          // gravity as it is. Rotating it by R_world_odom (the graph's
+          // correction at this keyframe, as for the velocity) let the graph's
+          // own attitude errors tilt the gravity of every later IMU factor.
+          const Eigen::Vector3d g_world = odometry_.gravity_map_mps2();
           if (const std::optional<ImuPreintegration> pim = odometry_.preintegrate(p.stamp_s, t_imu, p.bias, g_world)) {
             graph_.add_imu(prev, node, *pim);
             linked = true;
