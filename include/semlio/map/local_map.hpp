@@ -6,10 +6,12 @@
 /// frame, voxel-downsampled (each voxel: centroid, majority label), with a
 /// k-d tree and a cached normal / line direction per map point (eq. 3-6).
 ///
-/// Cost model: build() is the expensive step (transform, voxelise, tree,
-/// one 10-NN fit per map point); the pipeline calls it when a keyframe is
-/// added (or the keyframe set near the vehicle changes), never per frame.
-/// Every per-frame query then reads the built maps only.
+/// Cost model: build() is the expensive step (transform, voxelise, tree;
+/// normals and candidate lists are filled lazily, see feature_map.hpp); the
+/// pipeline calls it when a keyframe is added, never per frame. Voxelising
+/// merges the newcomers into the previous build's sorted points rather than
+/// re-sorting every point within the radius (build_one()); the k-d tree is
+/// still rebuilt whole. Every per-frame query then reads the built maps only.
 ///
 /// Memory: a stored keyframe's features are ~0.1 MB (KITTI-like scans), and
 /// a front end that kept them all grows without bound (~65 MB per 1000
