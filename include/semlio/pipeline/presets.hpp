@@ -9,7 +9,9 @@
 /// Robust corners (default; PipelineSettings::corner_cauchy_m = 0.1 m, 0
 /// turns them off). The corner residual of both presets is Robust<Cauchy,
 /// PointToLine>; at scale 0 the Cauchy weight is exactly 1 and the terms are
-/// LIO-SAM's plain point-to-line bit for bit. Why on: a few corner matches
+/// the plain least-squares point-to-line bit for bit (LIO-SAM itself is not
+/// plain: it scales corner terms by 1 - 0.9 |d| and drops those below 0.1,
+/// a cruder kernel of the same kind). Why on: a few corner matches
 /// pair a feature with a line it does not lie on (horizontal ground lines
 /// near the car, edges on adjacent rings matched to one near-horizontal map
 /// line) and keep 0.3-0.9 m residuals at the right pose; squared, they pull
@@ -17,7 +19,8 @@
 /// 0.55 cm with a 0.1 m kernel). Down-weighted corners can push the forward
 /// eigenvalue under LIO-SAM's absolute degeneracy threshold, and frozen there
 /// the full preset lost track, so the presets damp degenerate directions
-/// instead of freezing them (GaussNewtonConfig::damp_degenerate on). A robust
+/// instead of freezing them (GaussNewtonConfig::damp_degenerate on; frames
+/// reset to a measured prediction, the LIO's, stay frozen: odometry.hpp). A robust
 /// kernel wants a start near the answer: the first frame after the start has
 /// no motion estimate, and in heavy traffic the full preset then ended 1 m
 /// short for good; Odometry therefore solves that frame plain
