@@ -128,6 +128,12 @@ TEST_CASE("keyframe inertial graph: hand-checked between and IMU residuals", "[g
   scaled.add_imu(0, 1, pim);
   CHECK(scaled.chi2() == Approx(1e-3 * expected).epsilon(1e-9));
   CHECK_THROWS_AS(KeyframeInertialGraph({.imu_information_scale = 0.0}), ConfigError);
+  // The IMU factors can be read back (diagnostics: chi2 at other states).
+  REQUIRE(scaled.num_imu_factors() == 1);
+  CHECK(scaled.imu_factor(0).from == 0);
+  CHECK(scaled.imu_factor(0).to == 1);
+  CHECK(scaled.imu_factor(0).pim.delta_t_s() == pim.delta_t_s());
+  CHECK_THROWS_AS(scaled.imu_factor(1), ValueError);
 }
 
 TEST_CASE("keyframe inertial graph: exact states with noise-free IMU are a fixed point", "[graph]") {
