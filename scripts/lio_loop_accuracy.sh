@@ -9,18 +9,26 @@
 # Optionally (LIDAR=1) lidar-only --loop on on the same drive, for reference.
 #   scripts/lio_loop_accuracy.sh                 # 600 frames, seed 1
 #   FRAMES=900 SEED=2 scripts/lio_loop_accuracy.sh
-# Environment: FRAMES (600), SEED (1), PRESET (full), LABELS (labels),
-# BUILD_DIR (build), OUT (results/lio_loop_<FRAMES>_<SEED>), DRIVE (reuse a
+#   FRAMES=1000 TRAFFIC=heavy scripts/lio_loop_accuracy.sh   # a harder drive
+# Environment: FRAMES (600), SEED (1), WORLD (urban), TRAFFIC (light),
+# PRESET (full), LABELS (labels),
+# BUILD_DIR (build), OUT (results/lio_loop[_<WORLD>][_<TRAFFIC>]_<FRAMES>_<SEED>,
+# the parts in brackets when not the default), DRIVE (reuse a
 # simulated drive), SKIP_BUILD=1 (use BUILD_DIR as built), KEEP_SCANS=1.
 # Prints the ATE of every run; the numbers are reported, not judged.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FRAMES=${FRAMES:-600}
 SEED=${SEED:-1}
+WORLD=${WORLD:-urban}
+TRAFFIC=${TRAFFIC:-light}
 PRESET=${PRESET:-full}
 LABELS=${LABELS:-labels}
 BUILD_DIR=${BUILD_DIR:-build}
-OUT=${OUT:-results/lio_loop_${FRAMES}_${SEED}}
+TAG=""
+if [ "$WORLD" != urban ]; then TAG="${TAG}_$WORLD"; fi
+if [ "$TRAFFIC" != light ]; then TAG="${TAG}_$TRAFFIC"; fi
+OUT=${OUT:-results/lio_loop${TAG}_${FRAMES}_${SEED}}
 DRIVE=${DRIVE:-$OUT/drive}
 
 if [ -z "${SKIP_BUILD:-}" ]; then
@@ -28,7 +36,7 @@ if [ -z "${SKIP_BUILD:-}" ]; then
   cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_simulate semlio_kitti
 fi
 if [ ! -f "$DRIVE/sim.json" ] || [ ! -d "$DRIVE/velodyne" ]; then
-  "$BUILD_DIR/examples/semlio_simulate" --world urban --frames "$FRAMES" --seed "$SEED" --revisit \
+  "$BUILD_DIR/examples/semlio_simulate" --world "$WORLD" --traffic "$TRAFFIC" --frames "$FRAMES" --seed "$SEED" --revisit \
     --distortion on --out "$DRIVE"
 fi
 
