@@ -408,8 +408,9 @@ class LocalMap {
   // order is kept in m.entries between builds. Usually the active set only
   // gains keyframes newer than all it held (and loses some), so a build
   // drops the entries of keyframes that left, sorts the new ones and merges
-  // them in (std::merge keeps the held entries first on equal keys, as their
-  // ids are lower): linear in the map instead of a sort of it. A keyframe
+  // them in (the merge keeps the held entries first on equal keys, as their
+  // ids are lower; std::inplace_merge, whose buffer is the size of the
+  // newcomers): linear in the map instead of a sort of it. A keyframe
   // that comes back, or a corrected pose, makes a full rebuild.
   void build_one(Cloud Keyframe::*member, double leaf_m, FeatureMap& map, MergedMap& m) {
     const double inv_leaf = 1.0 / leaf_m;
@@ -440,15 +441,17 @@ class LocalMap {
         if (!held(keyframes_[k].id)) append(keyframes_[k], m.fresh);
       }
       detail::radix_sort_by_key(m.fresh, m.scratch);
-      m.scratch.resize(m.entries.size() + m.fresh.size());
-      std::merge(m.entries.begin(), m.entries.end(), m.fresh.begin(), m.fresh.end(), m.scratch.begin(),
-                 [](const detail::MapEntry& x, const detail::MapEntry& y) { return x.key < y.key; });
-      m.entries.swap(m.scratch);
+      const auto held_count = static_cast<std::ptrdiff_t>(m.entries.size());
+      m.entries.reserve(m.entries.size() + m.fresh.size());  // exactly: no doubled capacity at rest
+      m.entries.insert(m.entries.end(), m.fresh.begin(), m.fresh.end());
+      std::inplace_merge(m.entries.begin(), m.entries.begin() + held_count, m.entries.end(),
+                         [](const detail::MapEntry& x, const detail::MapEntry& y) { return x.key < y.key; });
     } else {
       m.entries.clear();
       for (const std::size_t k : active_pos_) append(keyframes_[k], m.entries);
       detail::radix_sort_by_key(m.entries, m.scratch);
     }
+    std::vector<detail::MapEntry>().swap(m.scratch);  // only a full rebuild needs it map-sized
     m.ids = active_;
     m.valid = true;
     m.merged = incremental;
@@ -465,8 +468,8 @@ class LocalMap {
   std::vector<std::size_t> active_pos_;  // and their positions in keyframes_
   FeatureMap corners_{FeatureKind::kLine};
   FeatureMap surfaces_{FeatureKind::kPlane};
-  // Sorted entries of the last build, per map (~25 MB each on a full 50 m
-  // map, with their buffers; kept so that the next build is a merge).
+  // Sorted entries of the last build, per map (32 bytes per merged point,
+  // ~10-20 MB on a full 50 m map; kept so that the next build is a merge).
   MergedMap merged_corners_;
   MergedMap merged_surfaces_;
 };
