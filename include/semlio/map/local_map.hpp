@@ -30,6 +30,7 @@
 #include <cstddef>
 #include <concepts>
 #include <cstdint>
+#include <iterator>
 #include <string>
 #include <utility>
 #include <vector>
@@ -431,9 +432,11 @@ class LocalMap {
       if (incremental && !m.ids.empty() && id < m.ids.back() && !held(id)) incremental = false;
     }
     if (incremental) {
-      if (!std::includes(active_.begin(), active_.end(), m.ids.begin(), m.ids.end())) {
+      left_.clear();
+      std::set_difference(m.ids.begin(), m.ids.end(), active_.begin(), active_.end(), std::back_inserter(left_));
+      if (!left_.empty()) {
         std::erase_if(m.entries, [this](const detail::MapEntry& e) {
-          return !std::binary_search(active_.begin(), active_.end(), e.keyframe);
+          return std::binary_search(left_.begin(), left_.end(), e.keyframe);  // usually one or two keyframes
         });
       }
       m.fresh.clear();
@@ -472,6 +475,7 @@ class LocalMap {
   // ~10-20 MB on a full 50 m map; kept so that the next build is a merge).
   MergedMap merged_corners_;
   MergedMap merged_surfaces_;
+  std::vector<std::size_t> left_;  // keyframes that left the active set since the last build
 };
 
 }  // namespace semlio
