@@ -65,16 +65,16 @@ namespace detail {
 
 /// Voxel-grid downsampling with labels, the straightforward reference of
 /// downsample_labelled (same contract, same output bit for bit; kept for the
-/// test that proves it and the benchmark that times both): one output point per occupied voxel
-/// of edge `leaf_m`, at the centroid of its points, carrying the voxel's
-/// majority label (ties: the lowest class id). Output order is by voxel key,
-/// so the result does not depend on the input order. Non-finite points and
-/// points beyond +-2^20 leaves from the origin are dropped. labels may be
-/// empty (all unlabeled).
+/// test that proves it and the benchmark that times both): one output point
+/// per occupied voxel of edge `leaf_m`, at the centroid of its points,
+/// carrying the voxel's majority label (ties: the lowest class id). Output
+/// order is by voxel key, so the result does not depend on the input order.
+/// Non-finite points and points beyond +-2^20 leaves from the origin are
+/// dropped. labels may be empty (all unlabeled).
 inline void downsample_labelled_reference(const std::vector<Eigen::Vector3f>& points,
-                                const std::vector<Class>& labels, double leaf_m,
-                                std::vector<Eigen::Vector3f>& out_points,
-                                std::vector<Class>& out_labels) {
+                                          const std::vector<Class>& labels, double leaf_m,
+                                          std::vector<Eigen::Vector3f>& out_points,
+                                          std::vector<Class>& out_labels) {
   constexpr std::int64_t kHalf = std::int64_t{1} << 20;
   const double inv_leaf = 1.0 / leaf_m;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
