@@ -36,19 +36,7 @@ import subprocess
 import sys
 import tempfile
 
-
-def read_kitti(path):
-    poses = []
-    with open(path) as f:
-        for n, line in enumerate(f, 1):
-            v = line.split()
-            if not v:
-                continue
-            if len(v) != 12:
-                sys.exit(f"{path}:{n}: expected 12 numbers, got {len(v)}")
-            m = [float(x) for x in v]
-            poses.append([m[0:4], m[4:8], m[8:12], [0.0, 0.0, 0.0, 1.0]])
-    return poses
+from kitti_poses import read_kitti_poses
 
 
 def inverse(a):
@@ -136,9 +124,9 @@ def main():
             sys.exit(f"{os.path.join(args.run, name)}: missing (expected a semlio_kitti --loop on output directory)")
     if not os.path.isfile(args.gt):
         sys.exit(f"{args.gt}: missing ground-truth pose file")
-    gt = read_kitti(args.gt)
-    odom = read_kitti(os.path.join(args.run, "poses_odom.txt"))
-    optimised = read_kitti(os.path.join(args.run, "poses.txt"))
+    gt = read_kitti_poses(args.gt)
+    odom = read_kitti_poses(os.path.join(args.run, "poses_odom.txt"))
+    optimised = read_kitti_poses(os.path.join(args.run, "poses.txt"))
     with open(os.path.join(args.run, "keyframes.txt")) as f:
         keyframes = [int(line.split()[0]) for line in f if line.strip() and not line.startswith("#")]
     with open(os.path.join(args.run, "report.json")) as f:

@@ -8,27 +8,18 @@ Camera-frame poses (KITTI convention) are drawn as x (right) vs z (forward);
 lidar-frame poses as x (forward) vs y (left). Needs python3-matplotlib.
 """
 import argparse
-import sys
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from kitti_poses import read_kitti_poses  # noqa: E402
+
 
 def positions(path):
-    xs, ys, zs = [], [], []
-    with open(path) as f:
-        for line_no, line in enumerate(f, 1):
-            v = line.split()
-            if not v:
-                continue
-            if len(v) != 12:
-                sys.exit(f"{path}:{line_no}: expected 12 numbers, got {len(v)}")
-            xs.append(float(v[3]))
-            ys.append(float(v[7]))
-            zs.append(float(v[11]))
-    return xs, ys, zs
+    poses = read_kitti_poses(path)
+    return [T[0][3] for T in poses], [T[1][3] for T in poses], [T[2][3] for T in poses]
 
 
 def main():
