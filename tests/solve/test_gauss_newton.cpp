@@ -306,6 +306,15 @@ TEST_CASE("Gauss-Newton damps a weak direction instead of freezing it when asked
     CHECK(report.num_residuals == problem.all.points.size());
     CHECK((T.inverse() * T_true).log().norm() < 1e-6);
   }
+  SECTION("a start reset along weak directions is a measurement: damping is not applied, x stays") {
+    SE3d T;
+    const auto report = semlio::gauss_newton(problem, T,
+                                             {.degeneracy_ratio = 0.0, .reanalyse_degeneracy = true,
+                                              .reset_weak_directions = true, .damp_degenerate = true});
+    CHECK(report.ok());
+    CHECK(report.degenerate());
+    CHECK(std::abs(T.translation().x()) < 0.02);
+  }
 }
 
 TEST_CASE("Gauss-Newton in a corridor reports the corridor axis as degenerate", "[solve]") {

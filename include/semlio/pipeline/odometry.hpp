@@ -244,11 +244,8 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     GaussNewtonConfig solver = config_.solver;
     solver.reset_weak_directions =
         solver.reset_weak_directions && (has_prior || reset == WeakDirectionReset::kAlways);
-    // Where the prediction is trusted along weak directions, degenerate ones
-    // stay at it too (LIO-SAM's freeze): damping would let them drift from
-    // the IMU prediction by a shortened step. Measured on the simulated
-    // highway LIO with robust corners: 10.4 m ATE damped, 1.8 m frozen.
-    if (solver.reset_weak_directions) solver.damp_degenerate = false;
+    // (With the reset on, degenerate directions are frozen, not damped:
+    // GaussNewtonConfig::damp_degenerate.)
     // Robust kernels need a start near the answer (residual/robust.hpp): the
     // first frame after the start has no motion estimate (its prediction is
     // the last pose while the vehicle may move a metre), so it solves plain.

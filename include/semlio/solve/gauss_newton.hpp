@@ -88,7 +88,12 @@ struct GaussNewtonConfig {
   /// Damp degenerate directions instead of freezing them: their eigenvalues
   /// are raised to degeneracy_threshold (a prior of that information at the
   /// current pose), so a weak direction takes a shortened step instead of
-  /// none (see degeneracy_projection()). Off: LIO-SAM's remapping.
+  /// none (see degeneracy_projection()). Off: LIO-SAM's remapping. Not
+  /// applied with reset_weak_directions: a start that is a measured
+  /// prediction (the LIO's IMU) keeps degenerate directions at it too, as
+  /// damping would let them drift from it by a shortened step every frame
+  /// (simulated highway LIO with robust corners: 10.4 m ATE damped, 1.8 m
+  /// frozen).
   bool damp_degenerate = false;
   std::size_t min_residuals = 10;          ///< fewer residuals: status kTooFewResiduals, pose unchanged
 };
@@ -245,7 +250,7 @@ SolveStatus iterate(Problem& problem, SE3d& T, const GaussNewtonConfig& config, 
     if (locked == nullptr && (iteration == 0 || (associated && config.reanalyse_degeneracy))) {
       projection = degeneracy_projection(eq.H, config, report);
       if (iteration == 0 && first_run) report.initial_degenerate_directions = report.degenerate_directions;
-      if (config.damp_degenerate && config.remap_degenerate) {
+      if (config.damp_degenerate && config.remap_degenerate && !config.reset_weak_directions) {
         damping = degeneracy_damping(config, report);
         projection = Matrix6::Identity();
       }
