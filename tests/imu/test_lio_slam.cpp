@@ -43,24 +43,15 @@ PipelineSettings settings() {
 
 using FrontEnd = decltype(make_baseline_odometry(ScanLabels{}, settings()));
 
-// The LIO as Slam's front end with a heading drift of yaw_rad_per_m per
-// metre on its reported poses (as test_slam.cpp's ReplayFrontEnd): the
-// error loop closure exists to remove. Everything else is forwarded.
-class DriftingLio {
+// The LIO as Slam's front end with every call forwarded: the base of the
+// test front ends below, each of which changes one thing.
+class ForwardingLio {
  public:
-  DriftingLio(const LidarInertialConfig& c, double yaw_rad_per_m)
-      : lio_([] { return make_baseline_odometry(ScanLabels{}, settings()); }, c), yaw_rad_per_m_(yaw_rad_per_m) {}
+  ForwardingLio(const PipelineSettings& ps, const LidarInertialConfig& c)
+      : lio_([ps] { return make_baseline_odometry(ScanLabels{}, ps); }, c) {}
   bool push_imu(const ImuSample& s) { return lio_.push_imu(s); }
-  FrameReport process(Scan& scan, const std::optional<SE3d>& prior) {
-    FrameReport r = lio_.process(scan, prior);
-    const SE3d step = last_true_.inverse() * r.T_map_lidar;
-    const double d = step.translation().norm();
-    last_true_ = r.T_map_lidar;
-    last_drifted_ = last_drifted_ * SE3d(step.so3() * SO3d::exp(Eigen::Vector3d(0.0, 0.0, yaw_rad_per_m_ * d)),
-                                         step.translation());
-    r.T_map_lidar = last_drifted_;
-    return r;
-  }
+  bool push_velocity(double t, const Eigen::Vector3d& v) { return lio_.push_velocity(t, v); }
+  FrameReport process(Scan& scan, const std::optional<SE3d>& prior) { return lio_.process(scan, prior); }
   [[nodiscard]] const LoamFeatures& features() const { return lio_.features(); }
   [[nodiscard]] std::optional<KeyframeInertialNode> inertial_state() const { return lio_.inertial_state(); }
   [[nodiscard]] std::optional<ImuPreintegration> preintegrate(double t0, double t1, const ImuBias& b,
@@ -73,8 +64,29 @@ class DriftingLio {
   void drop_imu_before(double t) { lio_.drop_imu_before(t); }
   [[nodiscard]] const LidarInertialReport& last_report() const { return lio_.last_report(); }
 
- private:
+ protected:
   LidarInertialFrontEnd<FrontEnd> lio_;
+};
+
+// The LIO with a heading drift of yaw_rad_per_m per metre on its reported
+// poses (as test_slam.cpp's ReplayFrontEnd): the error loop closure exists
+// to remove.
+class DriftingLio : public ForwardingLio {
+ public:
+  DriftingLio(const LidarInertialConfig& c, double yaw_rad_per_m)
+      : ForwardingLio(settings(), c), yaw_rad_per_m_(yaw_rad_per_m) {}
+  FrameReport process(Scan& scan, const std::optional<SE3d>& prior) {
+    FrameReport r = lio_.process(scan, prior);
+    const SE3d step = last_true_.inverse() * r.T_map_lidar;
+    const double d = step.translation().norm();
+    last_true_ = r.T_map_lidar;
+    last_drifted_ = last_drifted_ * SE3d(step.so3() * SO3d::exp(Eigen::Vector3d(0.0, 0.0, yaw_rad_per_m_ * d)),
+                                         step.translation());
+    r.T_map_lidar = last_drifted_;
+    return r;
+  }
+
+ private:
   double yaw_rad_per_m_;
   SE3d last_true_;
   SE3d last_drifted_;
@@ -332,32 +344,18 @@ TEST_CASE("IMU factors at the simulator's ground truth: chi2 ~ dimension", "[imu
 
 namespace {
 
-// The LIO as Slam's front end, optionally reporting a given gravity (the
-// truth) to the keyframe graph instead of its own estimate: isolates what the
-// gravity estimate does to the IMU factors. Everything else is forwarded.
-class GravityOverrideLio {
+// The LIO, optionally reporting a given gravity (the truth) to the keyframe
+// graph instead of its own estimate: isolates what the gravity estimate does
+// to the IMU factors.
+class GravityOverrideLio : public ForwardingLio {
  public:
   GravityOverrideLio(const PipelineSettings& ps, const LidarInertialConfig& c, std::optional<Eigen::Vector3d> g)
-      : lio_([ps] { return make_baseline_odometry(ScanLabels{}, ps); }, c), g_(std::move(g)) {}
-  bool push_imu(const ImuSample& s) { return lio_.push_imu(s); }
-  bool push_velocity(double t, const Eigen::Vector3d& v) { return lio_.push_velocity(t, v); }
-  FrameReport process(Scan& scan, const std::optional<SE3d>& prior) { return lio_.process(scan, prior); }
-  [[nodiscard]] const LoamFeatures& features() const { return lio_.features(); }
-  [[nodiscard]] std::optional<KeyframeInertialNode> inertial_state() const { return lio_.inertial_state(); }
-  [[nodiscard]] std::optional<ImuPreintegration> preintegrate(double t0, double t1, const ImuBias& b,
-                                                              const Eigen::Vector3d& g) const {
-    return lio_.preintegrate(t0, t1, b, g);
-  }
+      : ForwardingLio(ps, c), g_(std::move(g)) {}
   [[nodiscard]] const Eigen::Vector3d& gravity_map_mps2() const {
     return g_ && lio_.gravity_map_mps2().norm() > 0.0 ? *g_ : lio_.gravity_map_mps2();
   }
-  [[nodiscard]] const SE3d& T_imu_lidar() const { return lio_.T_imu_lidar(); }
-  [[nodiscard]] double imu_stamp_s(double t) const { return lio_.imu_stamp_s(t); }
-  void drop_imu_before(double t) { lio_.drop_imu_before(t); }
-  [[nodiscard]] const LidarInertialReport& last_report() const { return lio_.last_report(); }
 
  private:
-  LidarInertialFrontEnd<FrontEnd> lio_;
   std::optional<Eigen::Vector3d> g_;
 };
 static_assert(InertialSlamFrontEnd<GravityOverrideLio>);

@@ -20,7 +20,7 @@
 /// eigenvalue under LIO-SAM's absolute degeneracy threshold, and frozen there
 /// the full preset lost track, so the presets damp degenerate directions
 /// instead of freezing them (GaussNewtonConfig::damp_degenerate on; frames
-/// reset to a measured prediction, the LIO's, stay frozen: odometry.hpp). A robust
+/// reset to a measured prediction, the LIO's, stay frozen: GaussNewtonConfig). A robust
 /// kernel wants a start near the answer: the first frame after the start has
 /// no motion estimate, and in heavy traffic the full preset then ended 1 m
 /// short for good; Odometry therefore solves that frame plain
