@@ -14,6 +14,7 @@
 #include <set>
 #include <thread>
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include <semlio/associate/nearest_k.hpp>
@@ -340,22 +341,51 @@ TEST_CASE("LocalMap builds the real KITTI scan deterministically", "[map]") {
   CHECK(unit == a.surfaces().size());
 }
 
+namespace {
+
+// The real scan 000000 reduced to one point per voxel of `leaf_m` (the first
+// in input order), sorted by voxel key, with its VoxelIndex: a map as
+// LocalMap hands it to FeatureMap (built here without LocalMap's centroids,
+// so the index is the only thing under test).
+std::pair<std::vector<Eigen::Vector3f>, semlio::VoxelIndex> key_sorted_kitti_cloud(double leaf_m) {
+  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.1);
+  std::vector<std::pair<std::uint64_t, Eigen::Vector3f>> keyed;
+  for (const Eigen::Vector3f& p : cloud.points) {
+    std::uint64_t key = 0;
+    if (semlio::detail::reference_voxel_key(p, 1.0 / leaf_m, key)) keyed.emplace_back(key, p);
+  }
+  std::stable_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<Eigen::Vector3f> points;
+  semlio::VoxelIndex index{.leaf_m = leaf_m, .keys = {}};
+  for (const auto& [key, p] : keyed) {
+    if (!index.keys.empty() && index.keys.back() == key) continue;
+    index.keys.push_back(key);
+    points.push_back(p);
+  }
+  return {points, index};
+}
+
+}  // namespace
+
 TEST_CASE("FeatureMap::nearest equals a k-d tree k-NN cut at the gate", "[map]") {
   // Exactness of the candidate-list shortcut: random queries around the real
   // scan (on, near and away from the map), every k, several gates, lists of
-  // several lengths (0 = k-d tree only).
-  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.4);
+  // several lengths (0 = k-d tree only), anchored by a 1-NN search or by a
+  // voxel index lookup (which picks a farther anchor than the nearest).
+  const bool with_index = GENERATE(false, true);
+  const auto [points, index] = key_sorted_kitti_cloud(0.4);
+  const semlio::VoxelIndex voxels = with_index ? index : semlio::VoxelIndex{};
   std::mt19937 rng(5);
-  std::uniform_int_distribution<std::size_t> pick(0, cloud.points.size() - 1);
+  std::uniform_int_distribution<std::size_t> pick(0, points.size() - 1);
   std::normal_distribution<float> jitter(0.0F, 0.5F);
   std::vector<Eigen::Vector3f> queries;
   for (int i = 0; i < 3000; ++i) {
     const float scale = i % 3 == 0 ? 0.1F : (i % 3 == 1 ? 1.0F : 4.0F);
-    queries.push_back(cloud.points[pick(rng)] + scale * Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng)));
+    queries.push_back(points[pick(rng)] + scale * Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng)));
   }
   for (const int list : {0, 12, 32}) {
     semlio::FeatureMap map(semlio::FeatureKind::kPlane);
-    map.build(cloud.points, {}, 10, list);
+    map.build(points, {}, 10, list, voxels);
     CHECK(map.candidate_list() == static_cast<std::size_t>(list == 0 ? 0 : std::max(list, 10)));
     for (const double gate : {0.3, 1.0, std::numeric_limits<double>::infinity()}) {
       for (const std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{15}, std::size_t{40}}) {
@@ -372,11 +402,30 @@ TEST_CASE("FeatureMap::nearest equals a k-d tree k-NN cut at the gate", "[map]")
           for (std::size_t j = 0; same && j < na; ++j) same = ia[j] == ib[j] && da[j] == db[j];
           mismatches += same ? 0U : 1U;
         }
-        INFO("list " << list << " gate " << gate << " k " << k);
+        INFO("index " << with_index << " list " << list << " gate " << gate << " k " << k);
         CHECK(mismatches == 0);
       }
     }
   }
+}
+
+TEST_CASE("FeatureMap rejects a voxel index that does not fit its points", "[map]") {
+  const auto [points, index] = key_sorted_kitti_cloud(0.4);
+  REQUIRE(points.size() > 100);
+  semlio::FeatureMap map(semlio::FeatureKind::kPlane);
+  CHECK_NOTHROW(map.build(points, {}, 10, 32, index));
+  semlio::VoxelIndex shorter = index;
+  shorter.keys.pop_back();
+  CHECK_THROWS_AS(map.build(points, {}, 10, 32, shorter), semlio::ValueError);
+  semlio::VoxelIndex unsorted = index;
+  std::swap(unsorted.keys[10], unsorted.keys[11]);
+  CHECK_THROWS_AS(map.build(points, {}, 10, 32, unsorted), semlio::ValueError);
+  semlio::VoxelIndex repeated = index;
+  repeated.keys[11] = repeated.keys[10];
+  CHECK_THROWS_AS(map.build(points, {}, 10, 32, repeated), semlio::ValueError);
+  semlio::VoxelIndex no_leaf = index;
+  no_leaf.leaf_m = 0.0;
+  CHECK_THROWS_AS(map.build(points, {}, 10, 32, no_leaf), semlio::ValueError);
 }
 
 TEST_CASE("FeatureMap::nearest with a NearestCache equals a k-d tree k-NN cut at the gate", "[map]") {

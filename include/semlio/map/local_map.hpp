@@ -127,20 +127,6 @@ struct MapEntry {
   Class label;
 };
 
-/// The reference's voxel key of p (leaf given as its inverse [1/m]); false
-/// for the points it drops (non-finite, beyond +-2^20 leaves).
-inline bool reference_voxel_key(const Eigen::Vector3f& p, double inv_leaf, std::uint64_t& key) {
-  constexpr double kHalf = 1048576.0;
-  if (!p.allFinite()) return false;
-  key = 0;
-  for (int a = 0; a < 3; ++a) {
-    const double v = std::floor(static_cast<double>(p[a]) * inv_leaf);
-    if (!(v >= -kHalf && v < kHalf)) return false;
-    key = (key << 21U) | static_cast<std::uint64_t>(static_cast<std::int64_t>(v) + (std::int64_t{1} << 20));
-  }
-  return true;
-}
-
 /// Stable LSD radix sort of entries by key (11-bit digits; a digit equal in
 /// every key costs one histogram and no pass). The result is in `entries`.
 inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEntry>& scratch) {
@@ -168,10 +154,12 @@ inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEnt
 
 /// Centroid (points summed in entry order) and majority label (ties: the
 /// lowest class id) of each run of equal keys in key-sorted entries.
+/// out_keys, when given, receives each voxel's key (strictly ascending).
 inline void emit_voxels(const std::vector<MapEntry>& entries, std::vector<Eigen::Vector3f>& out_points,
-                        std::vector<Class>& out_labels) {
+                        std::vector<Class>& out_labels, std::vector<std::uint64_t>* out_keys = nullptr) {
   out_points.clear();
   out_labels.clear();
+  if (out_keys != nullptr) out_keys->clear();
   const std::size_t n = entries.size();
   std::size_t b = 0;
   while (b < n) {
@@ -184,6 +172,7 @@ inline void emit_voxels(const std::vector<MapEntry>& entries, std::vector<Eigen:
       ++e;
     }
     out_points.push_back((sum / static_cast<double>(e - b)).cast<float>());
+    if (out_keys != nullptr) out_keys->push_back(entries[b].key);
     if (one_label) {
       out_labels.push_back(entries[b].label);
     } else {
@@ -460,8 +449,10 @@ class LocalMap {
     m.merged = incremental;
     std::vector<Eigen::Vector3f> points;
     std::vector<Class> labels;
-    detail::emit_voxels(m.entries, points, labels);
-    map.build(std::move(points), std::move(labels), config_.shape_neighbours, config_.candidate_list);
+    VoxelIndex voxels{.leaf_m = leaf_m, .keys = {}};
+    detail::emit_voxels(m.entries, points, labels, &voxels.keys);
+    map.build(std::move(points), std::move(labels), config_.shape_neighbours, config_.candidate_list,
+              std::move(voxels));
   }
 
   Config config_;
