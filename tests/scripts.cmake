@@ -29,3 +29,11 @@ semlio_add_script_test(kitti_raw_consistency ${CMAKE_COMMAND} -E env REPORT_ONLY
 semlio_add_script_test(pgo_validate ${SEMLIO_BASH} scripts/pgo_validate.sh "${PROJECT_BINARY_DIR}")
 # GeometricSegmenter mIoU table, 2 frames per world.
 semlio_add_script_test(segmenter_miou ${SEMLIO_BASH} scripts/segmenter_miou.sh 2 1)
+
+# semlio_kitti keeps going over unreadable frames (--bad-scans skip) and stops
+# on them with --bad-scans stop.
+add_test(NAME semlio_kitti_bad_scans
+         COMMAND ${CMAKE_COMMAND} "-DSEMLIO_KITTI=$<TARGET_FILE:semlio_kitti>"
+                 "-DDATA_DIR=${CMAKE_CURRENT_SOURCE_DIR}/data" "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/bad_scans_check"
+                 -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/run_bad_scans_check.cmake")
+set_tests_properties(semlio_kitti_bad_scans PROPERTIES LABELS examples TIMEOUT 300)

@@ -78,6 +78,7 @@ struct Options {
   std::string deskew;         // on|off; empty = the YAML's deskew.mode
   std::string imu_time_offset = "auto";  // t_imu = t_lidar + offset [s], or auto
   std::string velocity_hint = "oxts";    // oxts|none: INS velocity while the LIO initialises
+  std::string bad_scans = "skip";        // skip|stop: an unreadable frame is an empty scan, or ends the run
 };
 
 // Lidar-inertial facts of a run (--imu oxts).
@@ -145,6 +146,7 @@ struct BackEndFrame {
 
 struct RunResult {
   std::vector<semlio::FrameReport> reports;
+  std::vector<std::string> input_errors;  // per frame: why its files could not be read (empty: read fine)
   std::vector<BackEndFrame> back_end;
   semlio::RankHistogram ranks{};
   double wall_s = 0.0;
@@ -175,6 +177,24 @@ struct RunResult {
   std::vector<MemorySample> memory_trace;
   semlio::Scan map;
   ImuRunFacts imu;
+};
+
+// Reads the frames of a run. With --bad-scans skip a frame whose files cannot
+// be read (empty, truncated or missing scan; bad labels) becomes an empty
+// scan at its stamp -- the odometry reports too_few_features and keeps going
+// on its prediction -- and the reason goes to stderr and report.json; with
+// stop the error ends the run (exit 1), as it did before the option existed.
+struct FrameReader {
+  const semlio::io::KittiSequence& seq;
+  bool skip_bad = true;
+
+  semlio::Scan read(std::size_t i, RunResult& result) const {
+    std::string error;
+    semlio::Scan scan = skip_bad ? seq.read_or_empty(i, error) : seq.read(i);
+    if (!error.empty()) std::cerr << "\nsemlio_kitti: warning: frame " << i << " processed as an empty scan: " << error << "\n";
+    result.input_errors.push_back(std::move(error));
+    return scan;
+  }
 };
 
 // CPU time of the calling thread [ms]: unlike wall time it does not grow
@@ -236,7 +256,7 @@ double percentile(std::vector<double> v, double q) {
 // --loop on), `imu` feeds it before each scan.
 template <typename Odometry>
 RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool write_map,
-              const semlio::io::KittiSequence& seq, std::size_t first, std::size_t last, bool quiet,
+              const FrameReader& frames, std::size_t first, std::size_t last, bool quiet,
               [[maybe_unused]] ImuFeed* imu = nullptr) {
   RunResult result;
   const std::size_t n = last - first + 1;
@@ -250,7 +270,7 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t i = first; i <= last; ++i) {
     const double cpu_start_ms = thread_cpu_ms();
-    semlio::Scan scan = seq.read(i);
+    semlio::Scan scan = frames.read(i, result);
     if constexpr (decltype(slam)::kInertial) {
       if (imu != nullptr) imu->feed(slam, scan.stamp_s);
     }
@@ -305,7 +325,7 @@ RunResult run(Odometry odom, const semlio_examples::BackEndSettings& be, bool wr
 // odometry: the front end's scan-to-map poses. No back end, no map.
 template <typename Make>
 RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::vector<semlio::ImuSample>& imu,
-                  const std::vector<semlio_examples::OxtsVelocity>& velocities, const semlio::io::KittiSequence& seq,
+                  const std::vector<semlio_examples::OxtsVelocity>& velocities, const FrameReader& frames,
                   std::size_t first, std::size_t last, bool quiet) {
   RunResult result;
   const std::size_t n = last - first + 1;
@@ -320,7 +340,7 @@ RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::v
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t i = first; i <= last; ++i) {
     const double cpu_start_ms = thread_cpu_ms();
-    semlio::Scan scan = seq.read(i);
+    semlio::Scan scan = frames.read(i, result);
     feed.feed(lio, scan.stamp_s);
     const semlio::LidarInertialReport r = lio.process(scan);
     result.reports.push_back(r.frame);
@@ -397,6 +417,11 @@ int main(int argc, char** argv) {
                  "with --imu oxts: oxts (default) = the OXTS INS velocity guides the front end while the LIO "
                  "initialises; none = lidar + IMU only")
       ->check(CLI::IsMember({"oxts", "none"}));
+  app.add_option("--bad-scans", opt.bad_scans,
+                 "a frame whose scan or label file cannot be read (empty, truncated, missing): skip (default) = "
+                 "process it as an empty scan on the odometry's prediction and record why in report.json; "
+                 "stop = end the run with the error")
+      ->check(CLI::IsMember({"skip", "stop"}));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -502,26 +527,27 @@ int main(int argc, char** argv) {
     RunResult result;
     const bool geometric = opt.labels == "geometric";
     const bool use_labels = geometric || (opt.labels != "none" && seq.has_labels());
+    const FrameReader frames{seq, opt.bad_scans == "skip"};
     const auto run_preset = [&](auto segmenter) {
       if (lio_back_end) {
         ImuFeed feed{imu, velocities, lc};
         return opt.preset == "baseline"
                    ? run(semlio::LidarInertialFrontEnd([&] { return semlio::make_baseline_odometry(segmenter, settings); }, lc),
-                         back_end, write_map, seq, first, last_u, opt.quiet, &feed)
+                         back_end, write_map, frames, first, last_u, opt.quiet, &feed)
                    : run(semlio::LidarInertialFrontEnd([&] { return semlio::make_full_odometry(segmenter, settings); }, lc),
-                         back_end, write_map, seq, first, last_u, opt.quiet, &feed);
+                         back_end, write_map, frames, first, last_u, opt.quiet, &feed);
       }
       if (use_imu) {
         return opt.preset == "baseline"
-                   ? run_lio([&] { return semlio::make_baseline_odometry(segmenter, settings); }, lc, imu, velocities, seq, first,
+                   ? run_lio([&] { return semlio::make_baseline_odometry(segmenter, settings); }, lc, imu, velocities, frames, first,
                              last_u, opt.quiet)
-                   : run_lio([&] { return semlio::make_full_odometry(segmenter, settings); }, lc, imu, velocities, seq, first,
+                   : run_lio([&] { return semlio::make_full_odometry(segmenter, settings); }, lc, imu, velocities, frames, first,
                              last_u, opt.quiet);
       }
       return opt.preset == "baseline"
-                 ? run(semlio::make_baseline_odometry(segmenter, settings), back_end, write_map, seq, first, last_u,
+                 ? run(semlio::make_baseline_odometry(segmenter, settings), back_end, write_map, frames, first, last_u,
                        opt.quiet)
-                 : run(semlio::make_full_odometry(segmenter, settings), back_end, write_map, seq, first, last_u,
+                 : run(semlio::make_full_odometry(segmenter, settings), back_end, write_map, frames, first, last_u,
                        opt.quiet);
     };
     if (geometric) {
@@ -595,6 +621,8 @@ int main(int argc, char** argv) {
     }
     const long peak_kb = peak_rss_kb();
     const bool loops_on = back_end.slam.loop_closure;
+    const auto unreadable = static_cast<std::size_t>(std::count_if(
+        result.input_errors.begin(), result.input_errors.end(), [](const std::string& e) { return !e.empty(); }));
 
     {
       std::ofstream os(out / "report.json");
@@ -606,6 +634,7 @@ int main(int argc, char** argv) {
       j.field("frame", Tr ? "camera0" : "lidar");
       j.field("kitti_vertical_correction", settings.odometry.kitti_vertical_correction);
       j.field("keyframe_count", keyframes.size());
+      j.field("unreadable_frames", unreadable);
       j.field("loop_closure", loops_on);
       j.field("wall_time_s", result.wall_s);
       j.key("frame_time_ms").begin_object();
@@ -719,6 +748,7 @@ int main(int argc, char** argv) {
         j.field("cpu_ms", result.back_end[i].cpu_ms);
         j.field("loop_checked", result.back_end[i].loop_checked).field("loop_closed", result.back_end[i].loop_closed);
         if (use_imu) j.field("imu_fallback", result.imu.fallback_frame[i] != 0);
+        if (!result.input_errors[i].empty()) j.field("input_error", result.input_errors[i]);
         j.end_object();
       }
       j.end_array();
@@ -737,6 +767,9 @@ int main(int argc, char** argv) {
       if (status_counts[s] > 0) std::printf(" %s=%zu", semlio::to_string(static_cast<semlio::OdometryStatus>(s)), status_counts[s]);
     }
     std::printf("\n");
+    if (unreadable > 0) {
+      std::printf("  unreadable frames   %zu, processed as empty scans (input_error in report.json)\n", unreadable);
+    }
     if (loops_on) {
       std::printf("  loops               %zu accepted of %zu verified (%zu candidates, detector %s)\n",
                   result.loop_stats.accepted, result.loop_stats.verified, result.loop_stats.candidates,

@@ -168,8 +168,22 @@ TEST_CASE("sequence: gaps, missing and empty files, bad names, label folder", "[
     CHECK(seq.read(1).size() == 2);
     CHECK_THROWS_AS(seq.read(2), semlio::FormatError);
     CHECK_THROWS_AS(seq.read(3), semlio::ValueError);  // out of range
+    // The degraded mode: an unreadable frame is an empty scan at its stamp, with the reason.
+    std::string error = "stale";
+    CHECK(seq.read_or_empty(1, error).size() == 2);
+    CHECK(error.empty());
+    const Scan empty = seq.read_or_empty(2, error);
+    CHECK(empty.empty());
+    CHECK(empty.stamp_s == seq.stamp(2));
+    CHECK_THAT(error, Catch::Contains("000002.bin") && Catch::Contains("empty"));
+    CHECK_THROWS_AS(seq.read_or_empty(3, error), semlio::ValueError);  // out of range is a caller bug
+    semlio_test::write_text(dir.file("s/velodyne/000002.bin"), std::string(20, '\0'));  // truncated: 20 bytes
+    CHECK(seq.read_or_empty(2, error).empty());
+    CHECK_THAT(error, Catch::Contains("multiple of 16"));
     std::filesystem::remove(dir.file("s/velodyne/000001.bin"));
     CHECK_THROWS_AS(seq.read(1), semlio::IoError);  // vanished after listing
+    CHECK(seq.read_or_empty(1, error).empty());
+    CHECK_THAT(error, Catch::Contains("000001.bin"));
   }
   {
     semlio_test::KittiTempDir dir("seq");
@@ -185,6 +199,11 @@ TEST_CASE("sequence: gaps, missing and empty files, bad names, label folder", "[
     CHECK_THROWS_AS(seq.read(1), semlio::IoError);
     io::write_label_file(dir.file("s/predictions/000001.label"), {40U});  // 1 label, 2 points
     CHECK_THROWS_AS(seq.read(1), semlio::ValueError);
+    std::string error;
+    const Scan unreadable = seq.read_or_empty(1, error);
+    CHECK(unreadable.empty());
+    CHECK(unreadable.labels.empty());
+    CHECK_THAT(error, Catch::Contains("1 labels") && Catch::Contains("2 points"));
   }
   {
     semlio_test::KittiTempDir dir("seq");

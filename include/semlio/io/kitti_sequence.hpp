@@ -116,6 +116,26 @@ class KittiSequence {
     return scan;
   }
 
+  /// Frame i as read() returns it; when its files cannot be read (scan
+  /// missing, empty, truncated or malformed; label file missing or of the
+  /// wrong count) an empty scan at the frame's stamp instead, with the reason
+  /// in `error` (cleared when the frame is fine). A degraded mode for long
+  /// runs: the odometry reports an empty scan as too_few_features and keeps
+  /// going on its prediction, so one corrupt file does not end a drive.
+  /// Still throws ValueError for i out of range (a caller bug, not bad data).
+  [[nodiscard]] Scan read_or_empty(std::size_t i, std::string& error, ReadStats* stats = nullptr) const {
+    check_index(i);
+    error.clear();
+    try {
+      return read(i, stats);
+    } catch (const Error& e) {
+      error = e.what();
+    }
+    Scan scan;
+    scan.stamp_s = stamp(i);
+    return scan;
+  }
+
   /// The ground-truth file found (empty when none).
   [[nodiscard]] const std::string& ground_truth_path() const noexcept { return gt_path_; }
   /// True when a ground-truth file was found.
