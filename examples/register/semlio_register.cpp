@@ -11,8 +11,8 @@
 // PointToLine ring-crossing check (point_to_line.hpp) in degrees, 0 = off
 // (default; 20 removes the corner bias measured on KITTI).
 // --robust-corners M: a Cauchy kernel of scale M metres on the corner
-// (point-to-line) terms, 0 = off (default; 0.1 also removes that bias, see
-// README "LOAM corners bias short motions").
+// (point-to-line) terms (default 0.1, as the odometry presets: it removes
+// that bias too); 0 = plain least squares. README: "Robust corners".
 
 #include <CLI/CLI.hpp>
 
