@@ -28,6 +28,18 @@
 /// No node is fixed: the gauge comes from the priors (a keyframe graph puts
 /// one on its first node); without them the system is singular, reported as
 /// a status with the estimate unchanged -- never an abort, never NaN.
+///
+/// Gauge with IMU factors (4 DoF). Gravity is a constant of the world frame,
+/// so the IMU factors see the trajectory's roll and pitch: only position and
+/// the rotation about gravity are unobservable. A first-node prior built with
+/// gravity_gauge_information() holds just those; the graph then rotates the
+/// whole trajectory about horizontal axes until it agrees with the factors'
+/// gravity, i.e. it estimates the gravity direction. Before any IMU factor
+/// that prior leaves roll and pitch free (singular): a caller holds all 6 DoF
+/// until the first IMU factor, then relaxes the prior (set_prior_information).
+/// A window update holds the older nodes and so cannot turn the trajectory:
+/// the gravity direction is (re-)estimated by full solves only (while the
+/// graph fits in the window, and after loops).
 /// Not thread-safe.
 
 #include <Eigen/Core>
@@ -70,6 +82,34 @@ struct KeyframeInertialGraphConfig {
   SE3d T_imu_sensor = SE3d();           ///< sensor (lidar) -> IMU extrinsic of between / loop measurements
   ErrorConvention convention{};         ///< between-error convention (between_error.hpp)
 };
+
+/// Information (6x6, the [rho; phi] right perturbation of T_world_imu) of a
+/// pose prior that holds the position (sigma_m, isotropic) and the rotation
+/// about the gravity axis (sigma_yaw_rad) and nothing of roll and pitch: the
+/// 4-DoF gauge of an inertial graph (file comment). `R_world_imu` is the
+/// prior's rotation, `gravity_world` any nonzero vector along gravity.
+/// The prior's residual is ~ the right perturbation: T = T_ref exp(xi) moves
+/// the position by R rho (so rho's information is isotropic as the world's)
+/// and rotates by phi about BODY axes, i.e. by theta = R phi about world
+/// axes. Holding theta along the gravity direction u, theta^T (u u^T /
+/// sigma^2) theta, is phi^T (R^T u)(R^T u)^T phi / sigma^2. ValueError on a
+/// zero or non-finite gravity or a non-positive sigma.
+inline Eigen::Matrix<double, 6, 6> gravity_gauge_information(const SO3d& R_world_imu,
+                                                             const Eigen::Vector3d& gravity_world,
+                                                             double sigma_m, double sigma_yaw_rad) {
+  if (!gravity_world.allFinite() || !(gravity_world.norm() > 0.0)) {
+    throw ValueError("gravity_gauge_information: gravity must be finite and nonzero");
+  }
+  if (!(sigma_m > 0.0) || !(sigma_yaw_rad > 0.0) || !std::isfinite(sigma_m) || !std::isfinite(sigma_yaw_rad)) {
+    throw ValueError("gravity_gauge_information: sigmas must be finite and > 0, got " + std::to_string(sigma_m) +
+                     " m, " + std::to_string(sigma_yaw_rad) + " rad");
+  }
+  const Eigen::Vector3d u_imu = R_world_imu.inverse() * gravity_world.normalized();
+  Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
+  info.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() / (sigma_m * sigma_m);
+  info.bottomRightCorner<3, 3>() = u_imu * u_imu.transpose() / (sigma_yaw_rad * sigma_yaw_rad);
+  return info;
+}
 
 /// One node: the IMU's navigation state and bias at a keyframe.
 struct KeyframeInertialNode {
@@ -122,6 +162,23 @@ class KeyframeInertialGraph {
     check_finite(information.allFinite(), "add_prior");
     priors_.push_back({node, state, bias, 0.5 * (information + information.transpose())});
     return add_factor(Kind::prior, priors_.size() - 1, node, node);
+  }
+
+  /// Replaces the information of prior `factor` (as add_prior returned it;
+  /// ValueError for another factor or non-finite information), e.g. to relax
+  /// a first node's 6-DoF gauge to 4 DoF once IMU factors exist. The next
+  /// update() is full when the node is outside the window.
+  void set_prior_information(std::size_t factor, const Matrix15d& information) {
+    if (factor >= factors_.size() || factors_[factor].kind != Kind::prior) {
+      throw ValueError("KeyframeInertialGraph::set_prior_information: factor " + std::to_string(factor) +
+                       " is not a prior");
+    }
+    if (!information.allFinite()) {
+      throw ValueError("KeyframeInertialGraph::set_prior_information: information of factor " +
+                       std::to_string(factor) + " is not finite");
+    }
+    priors_[factors_[factor].index].information = 0.5 * (information + information.transpose());
+    if (!in_window(factors_[factor].to)) pending_full_ = true;
   }
 
   /// Lidar-odometry factor: Z = T_from^-1 T_to of the sensor poses.
