@@ -14,7 +14,15 @@
 # PRESET (full), LABELS (labels),
 # BUILD_DIR (build), OUT (results/lio_loop[_<WORLD>][_<TRAFFIC>]_<FRAMES>_<SEED>,
 # the parts in brackets when not the default), DRIVE (reuse a
-# simulated drive), SKIP_BUILD=1 (use BUILD_DIR as built), KEEP_SCANS=1.
+# simulated drive), SKIP_BUILD=1 (use BUILD_DIR as built), KEEP_SCANS=1,
+# IMU_SCALE (the keyframe graph's imu_information_scale; unset: SlamConfig's
+# default) and GRAVITY_GAUGE (true|false: the graph's 4-DoF gauge, i.e. it
+# estimates the gravity direction; unset: the default), both passed to the
+# --loop on run as YAML keys slam.imu_information_scale /
+# slam.inertial_gravity_gauge (OUT/lio_loop_on.yaml). REUSE_OFF=1 keeps an
+# existing OUT/lio_loop_off (the --loop off run does not depend on them).
+#   IMU_SCALE=1e-6 GRAVITY_GAUGE=false SKIP_BUILD=1 BUILD_DIR=build-lio \
+#     DRIVE=/tmp/drive KEEP_SCANS=1 OUT=/tmp/out_1e-6_6dof scripts/lio_loop_accuracy.sh
 # Prints the ATE of every run; the numbers are reported, not judged.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -49,8 +57,20 @@ run() {  # run NAME ARGS...
   "$BUILD_DIR/examples/semlio_kitti" --sequence "$DRIVE" --labels "$LABELS" --preset "$PRESET" \
     --out "$OUT/$name" --quiet "$@"
 }
-run lio_loop_on --imu oxts --deskew on --loop on
-run lio_loop_off --imu oxts --deskew on --loop off
+LOOP_ON_CONFIG=()
+rm -f "$OUT/lio_loop_on.yaml"  # a stale one would be reported as this run's settings
+if [ -n "${IMU_SCALE:-}" ] || [ -n "${GRAVITY_GAUGE:-}" ]; then
+  {
+    echo "slam:"
+    if [ -n "${IMU_SCALE:-}" ]; then echo "  imu_information_scale: $IMU_SCALE"; fi
+    if [ -n "${GRAVITY_GAUGE:-}" ]; then echo "  inertial_gravity_gauge: $GRAVITY_GAUGE"; fi
+  } > "$OUT/lio_loop_on.yaml"
+  LOOP_ON_CONFIG=(--config "$OUT/lio_loop_on.yaml")
+fi
+run lio_loop_on --imu oxts --deskew on --loop on "${LOOP_ON_CONFIG[@]}"
+if [ -z "${REUSE_OFF:-}" ] || [ ! -f "$OUT/lio_loop_off/report.json" ]; then
+  run lio_loop_off --imu oxts --deskew on --loop off
+fi
 if [ -n "${LIDAR:-}" ]; then run lidar_loop_on --imu none --deskew on --loop on; fi
 
 /usr/bin/python3 - "$OUT" <<'PY'
@@ -74,6 +94,8 @@ print(f"== ATE RMSE (all frames) lidar-inertial, --loop off:                  {a
 print(f"== ATE RMSE (all frames) lidar-inertial odometry of the --loop on run: {a_odom:.3f} m")
 print(f"== ATE RMSE (all frames) lidar-inertial + keyframe graph + loops:      {a_on:.3f} m")
 print(f"== ratio loops / no loops: {a_on / a_off if a_off > 0 else float('nan'):.3f}")
+cfg = f"{out}/lio_loop_on.yaml"
+print("== --loop on settings: " + (open(cfg).read().replace("\n", " ").strip() if os.path.exists(cfg) else "defaults"))
 if os.path.exists(f"{out}/lidar_loop_on/report.json"):
     li = rep("lidar_loop_on")["evaluation"]
     print(f"== lidar-only (CV deskew) --loop on: {li['ate_all_frames']['rmse_m']:.3f} m, "
