@@ -5,6 +5,8 @@
 # front-end issue targets:
 #   NormalConsistency / NearestK            (target <= 2.0, stretch <= 1.5)
 #   NormalConsistencyReference / NormalConsistency   (target >= 10)
+# and, reported beside them, one frame on the odometry's path (NearestCache,
+# 5 Gauss-Newton poses) with the map's axes warm and just rebuilt.
 # Ratios use CPU time (robust on a shared machine). Extra arguments go to the
 # association benchmark binary (e.g. --benchmark_min_time=1). Then runs
 # bench_gauss_newton (one Gauss-Newton iteration, residual accumulation and
@@ -56,6 +58,16 @@ for kind, scene in scenes:
 if rows == 0:
     print("no association rows in the benchmark output (filtered out?)")
 print("targets: NC/NearestK <= 2.0 (stretch 1.5), Ref/NC >= 10 ->", "met" if ok and rows > 0 else "NOT met")
+print()
+print("One frame on the odometry's path (set_scan + 5 Gauss-Newton associations with a NearestCache),")
+print("map axes warm / map just rebuilt (as after a keyframe); reported, not judged against the targets")
+print(f"{'input':<10}{'scene':<18}{'NK warm ms':>12}{'NC warm ms':>12}{'ratio':>8}{'NK cold ms':>12}{'NC cold ms':>12}{'ratio':>8}")
+for kind, scene in scenes:
+    vals = [cpu_ms(f"{a}/{t}{scene}") for t in ("frame_", "frame_cold_map_") for a in ("NearestK", "NormalConsistency")]
+    if any(v is None for v in vals):
+        continue
+    print(f"{kind:<10}{scene:<18}{vals[0]:12.2f}{vals[1]:12.2f}{vals[1] / vals[0]:8.2f}"
+          f"{vals[2]:12.2f}{vals[3]:12.2f}{vals[3] / vals[2]:8.2f}")
 ref, fast = cpu_ms("DownsampleLabelled/reference/merged_map"), cpu_ms("DownsampleLabelled/radix/merged_map")
 if ref is not None and fast is not None:
     print(f"map rebuild voxel downsampling, merged map input: reference {ref:.1f} ms, radix {fast:.1f} ms, "

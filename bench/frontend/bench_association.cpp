@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -126,6 +127,45 @@ void BM_Associate(benchmark::State& state, const Problem* (*problem)(), Kind kin
   state.counters["features"] = static_cast<double>(features.size());
   state.counters["matched"] = static_cast<double>(matched);
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(features.size()));
+}
+
+// One frame on the odometry's path (ScanToMapProblem): set_scan (for
+// NormalConsistency the scan tree and scan axes), then five re-associations
+// along converging poses, as Gauss-Newton's, sharing one NearestCache that
+// starts empty. BM_Associate times the per-point candidate lists instead,
+// which the odometry does not use. With `cold_map` the map is rebuilt from
+// the same points first (outside the timing), as after every keyframe: the
+// lazily fitted map axes Algorithm 1 reads are then refitted inside it.
+// Items = features x 5.
+template <typename A>
+void BM_AssociateFrame(benchmark::State& state, const Problem* (*problem)(), Kind kind, bool cold_map) {
+  const Problem& p = *problem();
+  const auto& features = kind == Kind::kSurfaces ? p.surfaces : p.corners;
+  const semlio::FeatureMap& built = kind == Kind::kSurfaces ? p.map.surfaces() : p.map.corners();
+  semlio::FeatureMap fresh(built.kind());
+  fresh.build(built.points(), built.labels(), built.shape_neighbours());
+  semlio::Correspondences out;
+  semlio::NearestCache cache;
+  Eigen::Matrix<double, 6, 1> xi;
+  xi << 0.05, -0.03, 0.02, 0.002, -0.001, 0.003;  // 6 cm and 0.2 deg off, halved per iteration
+  A associator;
+  for (auto _ : state) {
+    if (cold_map) {
+      state.PauseTiming();
+      fresh.build(built.points(), built.labels(), built.shape_neighbours());
+      state.ResumeTiming();
+    }
+    associator.set_map(fresh);
+    associator.set_scan(features);
+    cache.clear();
+    for (int k = 0; k < 5; ++k) {
+      associator.associate(p.T_map_scan * SE3d::exp(std::pow(0.5, k) * xi), out, cache);
+      benchmark::DoNotOptimize(out.data());
+    }
+    benchmark::ClobberMemory();
+  }
+  state.counters["features"] = static_cast<double>(features.size());
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * 5 * static_cast<std::int64_t>(features.size()));
 }
 
 // Per-frame preparation of NormalConsistency: scan k-d tree + scan-side axes.
@@ -255,6 +295,18 @@ void register_associators(const std::string& scene, const Problem* (*problem)(),
   }
 }
 
+void register_frames(const std::string& scene, const Problem* (*problem)(), Kind kind) {
+  for (const bool cold : {false, true}) {
+    const std::string tag = cold ? "frame_cold_map_" : "frame_";
+    benchmark::RegisterBenchmark(("NearestK/" + tag + scene).c_str(), BM_AssociateFrame<semlio::NearestK>, problem,
+                                 kind, cold)
+        ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("NormalConsistency/" + tag + scene).c_str(),
+                                 BM_AssociateFrame<semlio::NormalConsistency>, problem, kind, cold)
+        ->Unit(benchmark::kMillisecond);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -265,6 +317,10 @@ int main(int argc, char** argv) {
   register_associators("sim_corners", sim_ptr, Kind::kCorners, true);
   register_associators("street_surfaces", street_ptr, Kind::kSurfaces, true);
   register_associators("street_corners", street_ptr, Kind::kCorners, true);
+  register_frames("kitti_surfaces", kitti_ptr, Kind::kSurfaces);
+  register_frames("kitti_corners", kitti_ptr, Kind::kCorners);
+  register_frames("sim_surfaces", sim_ptr, Kind::kSurfaces);
+  register_frames("sim_corners", sim_ptr, Kind::kCorners);
   benchmark::RegisterBenchmark("NormalConsistencyPrepare/kitti_surfaces", BM_Prepare, kitti_ptr)
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("LocalMapBuild/kitti_features", BM_LocalMapBuild, false)->Unit(benchmark::kMillisecond);
