@@ -12,11 +12,12 @@
 ///  - map axes are cached per map point, fitted on first use (FeatureMap);
 ///  - scan axes are computed once per frame in set_scan(), not per candidate
 ///    nor per Gauss-Newton iteration; per feature only a rotation R * n1;
-///  - the 15 candidates come from FeatureMap::nearest(): a 1-NN anchor plus
-///    the anchor's cached candidate list, exact by a triangle-inequality
-///    bound (falling back to a 15-NN k-d tree search where the bound fails),
-///    so a feature costs about a 1-NN query and 32 distance evaluations
-///    instead of a 15-NN query (~2x a 5-NN one);
+///  - the 15 candidates come from FeatureMap::nearest(): an anchor (the map
+///    point of the query's voxel by a binary search, else the 1-NN) plus the
+///    anchor's cached candidate list, exact by a triangle-inequality bound
+///    (falling back to a 15-NN k-d tree search where the bound fails), so a
+///    feature costs a lookup and at most 32 distance evaluations instead of
+///    a 15-NN query (~2x a 5-NN one);
 ///  - across Gauss-Newton iterations (associate() with a NearestCache) each
 ///    feature keeps its own candidate list from the previous iteration and
 ///    reuses it while a triangle-inequality bound proves it still holds the
