@@ -16,10 +16,14 @@
 # the parts in brackets when not the default), DRIVE (reuse a
 # simulated drive), SKIP_BUILD=1 (use BUILD_DIR as built), KEEP_SCANS=1,
 # IMU_SCALE (the keyframe graph's imu_information_scale; unset: SlamConfig's
-# default) and GRAVITY_GAUGE (true|false: the graph's 4-DoF gauge, i.e. it
-# estimates the gravity direction; unset: the default), both passed to the
+# default), LIDAR_SCALE (slam.inertial_lidar_information_scale, the lidar
+# information's scale in the keyframe graph; unset: the default) and
+# GRAVITY_GAUGE (true|false: the graph's 4-DoF gauge, i.e. it
+# estimates the gravity direction; unset: the default), all passed to the
 # --loop on run as YAML keys slam.imu_information_scale /
-# slam.inertial_gravity_gauge (OUT/lio_loop_on.yaml). REUSE_OFF=1 keeps an
+# slam.inertial_lidar_information_scale / slam.inertial_gravity_gauge
+# (OUT/lio_loop_on.yaml). The weighting before issue 7's last point:
+# IMU_SCALE=1e-6 LIDAR_SCALE=1. REUSE_OFF=1 keeps an
 # existing OUT/lio_loop_off (the --loop off run does not depend on them).
 #   IMU_SCALE=1e-6 GRAVITY_GAUGE=false SKIP_BUILD=1 BUILD_DIR=build-lio \
 #     DRIVE=/tmp/drive KEEP_SCANS=1 OUT=/tmp/out_1e-6_6dof scripts/lio_loop_accuracy.sh
@@ -59,10 +63,11 @@ run() {  # run NAME ARGS...
 }
 LOOP_ON_CONFIG=()
 rm -f "$OUT/lio_loop_on.yaml"  # a stale one would be reported as this run's settings
-if [ -n "${IMU_SCALE:-}" ] || [ -n "${GRAVITY_GAUGE:-}" ]; then
+if [ -n "${IMU_SCALE:-}" ] || [ -n "${LIDAR_SCALE:-}" ] || [ -n "${GRAVITY_GAUGE:-}" ]; then
   {
     echo "slam:"
     if [ -n "${IMU_SCALE:-}" ]; then echo "  imu_information_scale: $IMU_SCALE"; fi
+    if [ -n "${LIDAR_SCALE:-}" ]; then echo "  inertial_lidar_information_scale: $LIDAR_SCALE"; fi
     if [ -n "${GRAVITY_GAUGE:-}" ]; then echo "  inertial_gravity_gauge: $GRAVITY_GAUGE"; fi
   } > "$OUT/lio_loop_on.yaml"
   LOOP_ON_CONFIG=(--config "$OUT/lio_loop_on.yaml")

@@ -160,6 +160,7 @@ inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings
         {"max_place_bytes", set(sl.max_place_bytes)},
         {"place_thinning_factor", set(sl.place_thinning_factor)},
         {"imu_information_scale", set(sl.inertial_graph.imu_information_scale)},
+        {"inertial_lidar_information_scale", set(sl.inertial_lidar_information_scale)},
         {"inertial_gravity_gauge", set(sl.inertial_gravity_gauge)},
         {"inertial_window_size", set(sl.inertial_graph.window_size)}}},
       {"loop_verify",

@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include <semlio/core/error.hpp>
 #include <semlio/imu/imu_factor.hpp>
 #include <semlio/loop/radius_detector.hpp>
 #include <semlio/pipeline/lidar_inertial.hpp>
@@ -210,6 +211,77 @@ TEST_CASE("lidar-inertial Slam: loops reduce the loop pair's error, states stay 
                        << " m with; endpoint " << end_off << " -> " << end_on << " m");
   CHECK(err_on < err_off);
   CHECK(end_on < end_off);
+}
+
+namespace {
+
+// The LIO (no drift) as Slam's front end over the first `frames` frames of
+// drive(). Loops stay on (with them off the graph is never solved), but the
+// default detector's 30 s time gap finds none this early: the keyframe
+// graph's between and IMU factors only.
+struct WeightRun {
+  std::vector<SE3d> trajectory;
+  std::size_t imu_factors = 0;
+  double imu_information_scale = 0.0;
+};
+WeightRun run_weights(const SlamConfig& sc, std::size_t frames) {
+  const Drive& d = drive();
+  LidarInertialConfig lc;
+  lc.T_imu_lidar = d.T_imu_lidar;
+  lc.init.min_frames = 15;
+  lc.init.min_duration_s = 1.4;
+  Slam slam(ForwardingLio(settings(), lc), RadiusLoopDetector{}, sc);
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < frames; ++i) {
+    Scan scan = d.scans[i];
+    while (next < d.imu.size() && d.imu[next].stamp_s <= scan.stamp_s + lc.sweep_period_s + 1e-9) {
+      slam.push_imu(d.imu[next++]);
+    }
+    const SlamFrameReport r = slam.process(scan);
+    if (r.graph) REQUIRE(r.graph->ok());
+  }
+  REQUIRE(slam.loops().empty());
+  return {slam.trajectory(), slam.imu_factors(), slam.graph().config().imu_information_scale};
+}
+
+bool same(const std::vector<SE3d>& a, const std::vector<SE3d>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (a[i].matrix() != b[i].matrix()) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("lidar-inertial Slam: inertial_lidar_information_scale scales the lidar against the IMU", "[imu]") {
+  // Issue 7's weighting (slam.hpp, "IMU weighting"). Default, by
+  // measurement: IMU factors at 1e-6 of their white-noise information, lidar
+  // at the conventional s = 1. inertial_lidar_information_scale multiplies
+  // the lidar's between information and its ceiling on top of
+  // odometry_information_scale, so full IMU weight with the lidar at 1e4 is
+  // bit for bit the graph that gets 1e4 through odometry_information_scale
+  // (and max_information 1e12) instead, and differs from lidar scale 1.
+  constexpr std::size_t kWeightFrames = 60;  // the LIO initialises at 15
+  const SlamConfig defaults{};
+  CHECK(defaults.inertial_graph.imu_information_scale == 1e-6);
+  CHECK(defaults.inertial_lidar_information_scale == 1.0);
+  CHECK(run_weights(defaults, 1).imu_information_scale == 1e-6);  // reaches the graph
+  SlamConfig full{.inertial_lidar_information_scale = 1e4};
+  full.inertial_graph.imu_information_scale = 1.0;
+  const WeightRun base = run_weights(full, kWeightFrames);
+  CHECK(base.imu_information_scale == 1.0);
+  REQUIRE(base.imu_factors >= 10);
+  SlamConfig moved = full;
+  moved.odometry_information_scale = 1e4;
+  moved.max_information = 1e12;
+  moved.inertial_lidar_information_scale = 1.0;
+  SlamConfig weak = full;
+  weak.inertial_lidar_information_scale = 1.0;
+  CHECK(same(base.trajectory, run_weights(moved, kWeightFrames).trajectory));
+  CHECK_FALSE(same(base.trajectory, run_weights(weak, kWeightFrames).trajectory));
+  CHECK_THROWS_AS(SlamConfig{.inertial_lidar_information_scale = 0.0}.validate(), ConfigError);
+  CHECK_THROWS_AS(SlamConfig{.inertial_lidar_information_scale = 1e301}.validate(), ConfigError);
 }
 
 TEST_CASE("lidar-inertial Slam: an IMU gap falls back without a crash", "[imu]") {

@@ -244,6 +244,41 @@ TEST_CASE("Slam: loop closure removes the drift of a revisiting drive", "[pipeli
   for (const Class c : clean.labels) CHECK_FALSE(is_dynamic(c));
 }
 
+TEST_CASE("Slam lidar-only ignores the lidar-inertial weighting", "[pipeline]") {
+  // inertial_lidar_information_scale and the inertial graph's IMU scale only
+  // act with a lidar-inertial front end (slam.hpp, "IMU weighting"): the
+  // lidar-only graph keeps Omega = clamp(odometry_information_scale * H) on
+  // its between factors and the verifier's information on its loops, so
+  // every factor and pose is bit for bit the same under any of them.
+  const Drive& d = drive();
+  const SlamConfig base{.loop_closure = true, .loop_interval_s = 0.0};
+  SlamConfig other = base;
+  other.inertial_lidar_information_scale = 1e4;
+  other.inertial_graph.imu_information_scale = 1.0;
+  const auto a = replay(ReplayFrontEnd(0.003, 0.0), radius_detector(), base);
+  const auto b = replay(ReplayFrontEnd(0.003, 0.0), radius_detector(), other);
+  REQUIRE(a.loops().size() >= 1);
+  REQUIRE(a.graph().factors().size() == b.graph().factors().size());
+  std::size_t checked = 0;
+  for (std::size_t k = 0; k < a.graph().factors().size(); ++k) {
+    const auto& fa = a.graph().factors()[k];
+    CHECK(fa.information == b.graph().factors()[k].information);
+    if (fa.kind != FactorKind::between) continue;
+    // A between factor's information is the front end's clamped Hessian of
+    // the newer keyframe's frame (all frames tracked here).
+    const FrameReport& r = d.odometry[a.keyframe_frames()[fa.to]].report;
+    REQUIRE(r.solve.ok());
+    CHECK(fa.information == detail::clamp_information6(base.odometry_information_scale * r.solve.hessian,
+                                                       base.min_information, base.max_information));
+    ++checked;
+  }
+  CHECK(checked + 1 == a.graph().num_nodes());
+  const std::vector<SE3d> ta = a.trajectory();
+  const std::vector<SE3d> tb = b.trajectory();
+  REQUIRE(ta.size() == tb.size());
+  for (std::size_t i = 0; i < ta.size(); ++i) REQUIRE(ta[i].matrix() == tb[i].matrix());
+}
+
 TEST_CASE("Slam with Scan Context finds the loop too", "[pipeline]") {
   const Drive& d = drive();
   const auto slam = replay(ReplayFrontEnd(), ScanContextDetector(ScanContextConfig{.min_time_gap_s = 5.0}),
@@ -310,6 +345,7 @@ TEST_CASE("Slam on the real KITTI scans, and config validation", "[pipeline]") {
   CHECK_THROWS_AS(SlamConfig{.keyframe_cloud_leaf_m = -1.0}.validate(), ConfigError);
   CHECK_THROWS_AS((SlamConfig{.min_information = 10.0, .max_information = 1.0}.validate()), ConfigError);
   CHECK_THROWS_AS(SlamConfig{.loop_interval_s = -1.0}.validate(), ConfigError);
+  CHECK_THROWS_AS(SlamConfig{.inertial_lidar_information_scale = -1.0}.validate(), ConfigError);
   CHECK_NOTHROW(SlamConfig{}.validate());
 }
 
