@@ -3,6 +3,4 @@ set(SEMLIO_TESTS_imu_inertial
   imu/test_inertial_graph.cpp
   imu/test_inertial_init.cpp
   imu/test_lidar_inertial.cpp
-  imu/test_lio_deskew.cpp
-  imu/test_lio_slam.cpp
-  imu/test_oxts_fallback.cpp)
+  imu/test_lio_slam.cpp)
