@@ -13,7 +13,8 @@
 #   2. bench_frame_time: the same frames with the thread CPU time of each
 #      frame (CLOCK_THREAD_CPUTIME_ID) -- on a shared, loaded machine the wall
 #      time overstates the cost, the CPU time does not.
-# Environment: BUILD_DIR (build), OUT (results/frame_time), FRAMES (300), CORE (0).
+# Environment: BUILD_DIR (build), OUT (results/frame_time), FRAMES (300), CORE (0),
+# SKIP_BUILD=1 (use BUILD_DIR as built; CI runs a short version this way).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PCD_DIR=${1:-}
@@ -23,8 +24,10 @@ FRAMES=${FRAMES:-300}
 CORE=${CORE:-0}
 
 scripts/install_deps.sh python3-numpy
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
-cmake --build "$BUILD_DIR" -j 2 --target semlio_convert semlio_kitti semlio_simulate bench_frame_time
+if [[ -z "${SKIP_BUILD:-}" ]]; then
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
+  cmake --build "$BUILD_DIR" -j 2 --target semlio_convert semlio_kitti semlio_simulate bench_frame_time
+fi
 BIN="$BUILD_DIR/examples"
 BENCH="$BUILD_DIR/bench/bench_frame_time"
 mkdir -p "$OUT"

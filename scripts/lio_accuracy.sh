@@ -29,6 +29,8 @@ OUT=${OUT_ROOT:-results}/lio_${FRAMES}_${SEED}
 SIM=${SIM_BIN:-$BUILD_DIR/examples/semlio_simulate}
 LIO=${LIO_BIN:-$BUILD_DIR/examples/semlio_lio}
 # SKIP_BUILD=1: use BUILD_DIR as built (as the other scripts).
+# REPORT_ONLY=1: print every check but exit 0 whatever their verdict (CI's
+# short runs, too short to decide them; a failing run still fails).
 if [[ -z "${SKIP_BUILD:-}" && ( -z "${SIM_BIN:-}" || -z "${LIO_BIN:-}" ) ]]; then
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
   cmake --build "$BUILD_DIR" -j2 --target semlio_simulate semlio_lio
@@ -66,7 +68,7 @@ wait
 
 rm -rf "$OUT"/*_raw/velodyne "$OUT"/*_clean/velodyne
 /usr/bin/python3 - "$OUT" <<'PY'
-import json, sys
+import json, os, sys
 out = sys.argv[1]
 def rep(name):
     with open(f"{out}/{name}/report.json") as f:
@@ -104,5 +106,5 @@ urban_ok = ul["ate"]["rmse_m"] <= uc["ate"]["rmse_m"] * 1.05 + 0.02
 print(f"  no worse (within 5 % + 2 cm): {'yes' if urban_ok else 'NO'}")
 ok &= urban_ok
 print("MUST-HOLD:", "PASS" if ok else "FAIL")
-sys.exit(0 if ok else 1)
+sys.exit(0 if ok or os.environ.get("REPORT_ONLY") else 1)
 PY

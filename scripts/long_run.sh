@@ -12,6 +12,8 @@
 # OUT (results/long_run_<FRAMES>_<SEED>), DRIVE (reuse a simulated drive),
 # KEEP_SCANS=1 (keep DRIVE/velodyne), SKIP_BUILD=1, REPORT=path/report.json
 # (only analyse an existing semlio_kitti report, e.g. of loop_accuracy.sh).
+# REPORT_ONLY=1: print every check but exit 0 whatever their verdict (CI's
+# short runs, too short to decide them; a failing run still fails).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 FRAMES=${FRAMES:-5000}
@@ -44,7 +46,7 @@ fi
 
 status=0
 /usr/bin/python3 - "$REPORT" "$WINDOW" <<'PY' || status=$?
-import json, statistics, sys
+import json, os, statistics, sys
 r = json.load(open(sys.argv[1]))
 frames = r["frames"]
 n = len(frames)
@@ -97,7 +99,7 @@ print(f"== growth of the median {growth:+.1f} % (mean {(a2 - a1) / a1 * 100.0:+.
 if "evaluation" in r:
     ev = r["evaluation"]
     print(f"== ATE RMSE {ev['ate_all_frames']['rmse_m']:.3f} m (odometry only {ev['ate_all_frames_odometry']['rmse_m']:.3f} m)")
-sys.exit(0 if growth < 10.0 and place_ok else 1)
+sys.exit(0 if (growth < 10.0 and place_ok) or os.environ.get("REPORT_ONLY") else 1)
 PY
 # Only a drive this invocation ran on is cleaned up (REPORT= only analyses).
 if [ -n "$RAN_DRIVE" ] && [ -z "${KEEP_SCANS:-}" ] && [ "$DRIVE" = "$OUT/drive" ] && [ -d "$DRIVE" ]; then

@@ -14,6 +14,8 @@
 # ONE_RUN=1 (skip the separate --loop off run: the --loop on run's
 # poses_odom.txt is the same odometry), KEEP_SCANS=1 (keep DRIVE/velodyne).
 # Prints the ATE of both runs and their ratio; exits 1 when the ratio > 0.5.
+# REPORT_ONLY=1: print every check but exit 0 whatever their verdict (CI's
+# short runs, too short to decide them; a failing run still fails).
 # Then scripts/loop_oracle.py on the same run: the same graph with every
 # accepted loop measured from the ground truth, i.e. what any back end could
 # reach with these loops (how much of the odometry's error they observe).
@@ -59,7 +61,7 @@ YAML
 
 # The drive must really revisit: a pose within 10 m of one driven >= GAP_S earlier.
 /usr/bin/python3 - "$DRIVE/poses.txt" "$GAP_S" <<'PY'
-import math, sys
+import math, os, sys
 p = []
 for line in open(sys.argv[1]):
     v = [float(x) for x in line.split()]
@@ -74,7 +76,10 @@ for i in range(gap, len(p), 5):
             best = (d, j, i)
 print(f"== drive: {len(p)} frames, {path:.0f} m; closest revisit {best[0]:.1f} m (frame {best[2]} vs {best[1]})")
 if best[0] > 10.0:
-    sys.exit(f"== the drive does not revisit a place (no pose within 10 m of one {gap / 10:.0f} s older)")
+    msg = f"== the drive does not revisit a place (no pose within 10 m of one {gap / 10:.0f} s older)"
+    if not os.environ.get("REPORT_ONLY"):
+        sys.exit(msg)
+    print(msg)
 PY
 
 run() {
@@ -86,7 +91,7 @@ if [ -z "${ONE_RUN:-}" ]; then run off; fi
 
 status=0
 /usr/bin/python3 - "$OUT" "${ONE_RUN:-}" <<'PY' || status=$?
-import json, sys
+import json, os, sys
 out, one_run = sys.argv[1], sys.argv[2]
 on = json.load(open(f"{out}/loop_on/report.json"))
 ev = on["evaluation"]
@@ -105,7 +110,7 @@ ratio = ate_on / ate_off if ate_off > 0 else float("inf")
 print(f"== ATE RMSE odometry only ({src}): {ate_off:.3f} m")
 print(f"== ATE RMSE with loop closure:  {ate_on:.3f} m")
 print(f"== ratio {ratio:.3f} (must be <= 0.5): {'PASS' if ratio <= 0.5 else 'FAIL'}")
-sys.exit(0 if ratio <= 0.5 else 1)
+sys.exit(0 if ratio <= 0.5 or os.environ.get("REPORT_ONLY") else 1)
 PY
 if [ -x "$BUILD_DIR/examples/semlio_pgo" ] && [ -x "$BUILD_DIR/examples/semlio_eval" ]; then
   echo "== oracle (the run's loops measured from the ground truth):"

@@ -37,3 +37,21 @@ add_test(NAME semlio_kitti_bad_scans
                  "-DDATA_DIR=${CMAKE_CURRENT_SOURCE_DIR}/data" "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/bad_scans_check"
                  -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/run_bad_scans_check.cmake")
 set_tests_properties(semlio_kitti_bad_scans PROPERTIES LABELS examples TIMEOUT 300)
+
+# Short versions of the speed and must-hold scripts the issues name. Each run
+# must complete and print its table; REPORT_ONLY=1 where a short run cannot
+# decide the must-hold (the README's numbers come from the long runs).
+# Association kernel ratios (issue #4) with a tiny measuring time.
+semlio_add_script_test(bench_association ${SEMLIO_BASH} scripts/bench_association.sh --benchmark_min_time=0.01)
+set_tests_properties(script_bench_association PROPERTIES FAIL_REGULAR_EXPRESSION "no association rows")
+# Frame time per stage (issue #5) on the 3 real KITTI raw frames and a 12-frame drive.
+semlio_add_script_test(frame_time ${CMAKE_COMMAND} -E env FRAMES=12 ${SEMLIO_BASH} scripts/frame_time.sh
+  tests/data/kitti_raw/snippet_22)
+# Lidar-inertial must-holds (issue #7) on 30-frame drives.
+semlio_add_script_test(lio_accuracy ${CMAKE_COMMAND} -E env REPORT_ONLY=1 "OUT_ROOT=${script_out}/lio_accuracy"
+  ${SEMLIO_BASH} scripts/lio_accuracy.sh 30 1)
+# Loop closure and the long run (issue #6) on 60-frame drives.
+semlio_add_script_test(loop_accuracy ${CMAKE_COMMAND} -E env REPORT_ONLY=1 FRAMES=60 ONE_RUN=1
+  ${SEMLIO_BASH} scripts/loop_accuracy.sh)
+semlio_add_script_test(long_run ${CMAKE_COMMAND} -E env REPORT_ONLY=1 FRAMES=60 WINDOW=12
+  ${SEMLIO_BASH} scripts/long_run.sh)
