@@ -64,6 +64,7 @@ class ForwardingLio {
   [[nodiscard]] const SE3d& T_imu_lidar() const { return lio_.T_imu_lidar(); }
   [[nodiscard]] double imu_stamp_s(double t) const { return lio_.imu_stamp_s(t); }
   void drop_imu_before(double t) { lio_.drop_imu_before(t); }
+  [[nodiscard]] const SE3d& registered_pose() const { return lio_.registered_pose(); }
   [[nodiscard]] const LidarInertialReport& last_report() const { return lio_.last_report(); }
 
  protected:
@@ -87,6 +88,8 @@ class DriftingLio : public ForwardingLio {
     r.T_map_lidar = last_drifted_;
     return r;
   }
+  // The scan-to-map pose under the same drift (the between factors use it).
+  [[nodiscard]] SE3d registered_pose() const { return last_drifted_ * last_true_.inverse() * lio_.registered_pose(); }
 
  private:
   double yaw_rad_per_m_;
@@ -282,6 +285,61 @@ TEST_CASE("lidar-inertial Slam: inertial_lidar_information_scale scales the lida
   CHECK_FALSE(same(base.trajectory, run_weights(weak, kWeightFrames).trajectory));
   CHECK_THROWS_AS(SlamConfig{.inertial_lidar_information_scale = 0.0}.validate(), ConfigError);
   CHECK_THROWS_AS(SlamConfig{.inertial_lidar_information_scale = 1e301}.validate(), ConfigError);
+}
+
+namespace {
+
+// The LIO recording its scan-to-map and fused poses of every frame.
+class RecordingLio : public ForwardingLio {
+ public:
+  using ForwardingLio::ForwardingLio;
+  FrameReport process(Scan& scan, const std::optional<SE3d>& prior) {
+    FrameReport r = lio_.process(scan, prior);
+    registered.push_back(lio_.registered_pose());
+    fused.push_back(r.T_map_lidar);
+    return r;
+  }
+  std::vector<SE3d> registered;
+  std::vector<SE3d> fused;
+};
+static_assert(InertialSlamFrontEnd<RecordingLio>);
+
+}  // namespace
+
+TEST_CASE("lidar-inertial Slam: between factors measure the scan-to-map motion, not the IMU-fused one", "[imu]") {
+  // The LIO's fused poses already hold the IMU, which the graph's IMU
+  // factors add again (slam.hpp, "IMU weighting"); the betweens take the
+  // front end's scan-to-map poses instead.
+  const Drive& d = drive();
+  LidarInertialConfig lc;
+  lc.T_imu_lidar = d.T_imu_lidar;
+  lc.init.min_frames = 15;
+  lc.init.min_duration_s = 1.4;
+  Slam slam(RecordingLio(settings(), lc), RadiusLoopDetector{}, SlamConfig{});  // no loop within 6 s
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < 60; ++i) {
+    Scan scan = d.scans[i];
+    while (next < d.imu.size() && d.imu[next].stamp_s <= scan.stamp_s + lc.sweep_period_s + 1e-9) {
+      slam.push_imu(d.imu[next++]);
+    }
+    (void)slam.process(scan);
+  }
+  const RecordingLio& lio = slam.odometry();
+  const std::vector<std::size_t>& kf = slam.keyframe_frames();
+  const KeyframeInertialGraph& graph = slam.graph();
+  REQUIRE(slam.loops().empty());
+  REQUIRE(kf.size() >= 10);
+  REQUIRE(graph.num_pose_factors() + 1 == kf.size());  // one between per keyframe after the first
+  double most_fused_differs_m = 0.0;
+  for (std::size_t k = 0; k + 1 < kf.size(); ++k) {
+    const SE3d registered = lio.registered[kf[k]].inverse() * lio.registered[kf[k + 1]];
+    const SE3d fused = lio.fused[kf[k]].inverse() * lio.fused[kf[k + 1]];
+    INFO("between " << k);
+    CHECK((graph.pose_measurement(k).matrix() - registered.matrix()).cwiseAbs().maxCoeff() < 1e-12);
+    most_fused_differs_m = std::max(most_fused_differs_m, (fused.translation() - registered.translation()).norm());
+  }
+  // The distinction is real on this drive: the fused motion differs.
+  CHECK(most_fused_differs_m > 1e-4);
 }
 
 TEST_CASE("lidar-inertial Slam: an IMU gap falls back without a crash", "[imu]") {

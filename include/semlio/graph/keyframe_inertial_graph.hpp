@@ -265,6 +265,16 @@ class KeyframeInertialGraph {
     }
     return imus_[k].factor;
   }
+  /// Number of pose factors (betweens and loops).
+  [[nodiscard]] std::size_t num_pose_factors() const noexcept { return poses_.size(); }
+  /// Measured relative pose of pose factor k (in the order added; ValueError otherwise).
+  [[nodiscard]] const SE3d& pose_measurement(std::size_t k) const {
+    if (k >= poses_.size()) {
+      throw ValueError("KeyframeInertialGraph::pose_measurement: " + std::to_string(k) + " of " +
+                       std::to_string(poses_.size()) + " pose factors");
+    }
+    return poses_[k].measured;
+  }
   /// True when the next update() will be a full solve.
   [[nodiscard]] bool full_solve_pending() const noexcept { return pending_full_ || nodes_.size() <= config_.window_size; }
   /// Settings.

@@ -743,6 +743,9 @@ class LidarInertialFrontEnd {
     return f;
   }
 
+  /// The front end's scan-to-map pose of the last frame, before the inertial
+  /// fusion (Slam's between factors: the fused pose already holds the IMU).
+  [[nodiscard]] const SE3d& registered_pose() const noexcept { return last_.frame.T_map_lidar; }
   /// Features of the last frame (the front end's).
   [[nodiscard]] const LoamFeatures& features() const { return lio_.odometry().features(); }
   /// Association-rank histogram of the front end.

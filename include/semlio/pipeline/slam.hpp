@@ -153,16 +153,22 @@
 /// both, and their eigenvalue ceiling max_information, in this back end only
 /// (the floor stays: a degenerate direction stays weak and the IMU carries
 /// it; the lidar-only back end ignores the option, tests/pipeline/
-/// test_slam.cpp). All-frame ATE [m] on three drives, gravity gauge (LIO
+/// test_slam.cpp).
+///
+/// The between measurement is the front end's scan-to-map motion
+/// (LidarInertialFrontEnd::registered_pose), not the motion of the LIO's
+/// fused poses: those already hold the IMU, which the IMU factors would add
+/// a second time, while the between's information is the scan-to-map
+/// Hessian alone. All-frame ATE [m] on three drives, gravity gauge (LIO
 /// alone 0.0185 / 0.1033 / 0.1671):
 ///
-///   drive (urban, revisit, distortion)   default     A       B    |    C       D
-///   600 frames, seed 1, light            0.0200   0.0203  0.0206  |  0.0189  0.0197
-///   1000 frames, seed 2, heavy           0.0603   0.0624  0.0578  |  0.0444  0.0416
-///   800 frames, seed 3, light            0.1139   0.1171  0.1266  |  0.1103  0.1149
+///   drive (urban, revisit, distortion)   fused between      scan-to-map between
+///                                        default  A    B    default   A (expt.)
+///   600 frames, seed 1, light            0.0200 0.0203 0.0206  0.0189  0.0197
+///   1000 frames, seed 2, heavy           0.0603 0.0624 0.0578  0.0444  0.0416
+///   800 frames, seed 3, light            0.1139 0.1171 0.1266  0.1103  0.1149
 ///
-/// A: IMU 1, lidar 1e4. B: the same with the loops clamped at 1e8. C, D: the
-/// default and A with the between measured differently (experiment, below).
+/// A: IMU 1, lidar 1e4. B: the same with the loops clamped at 1e8.
 /// Drives: semlio_simulate --world urban --revisit --distortion on with
 /// those frames, seed and traffic. Default and A: scripts/lio_loop_accuracy.sh
 /// (DRIVE=<drive> KEEP_SCANS=1) with IMU_SCALE=1e-6 LIDAR_SCALE=1 (= the
@@ -171,22 +177,15 @@
 /// odometry_information_scale 1e4, max_information 1e12 and
 /// loop_verify.hessian_scale 1e4 (the verifier then clamps the loops at its
 /// max_eigenvalue 1e8; the 1e3 = 3 cm variant of it was worse: 0.0237 /
-/// 0.0605 on the first two drives). Full weight is worse on every drive at
-/// 1e4 and mixed with the loops clamped, so the default stays: IMU at 1e-6,
+/// 0.0605 on the first two drives). "A (expt.)": a local build with the
+/// same scan-to-map between before it was written here. Full weight is
+/// worse or mixed in every variant, so the default stays: IMU at 1e-6,
 /// lidar at s = 1. The IMU factors carry velocity, bias and the gravity
 /// direction between keyframes and bridge lidar failures without
-/// overruling the lidar. One reason full weight does not help: the between
-/// measurement is the LIO's pose after its own inertial optimisation
-/// (LidarInertialFrontEnd::process), so the IMU factors count the same
-/// samples twice, while its information is the scan-to-map Hessian alone.
-/// C and D (a local experiment, not this code: the between measured from
-/// the front end's scan-to-map poses, LidarInertialReport::frame) remove
-/// that; the default weighting then gains on all three drives,
-/// full weight is still mixed -- so using the scan-to-map pose is the next
-/// step, not full weight. (Neither is the window the cause: solving every
+/// overruling the lidar. (Neither is the window the cause: solving every
 /// keyframe in full at IMU scale 1 against s = 1, inertial_window_size
 /// 100000, cuts the drift before the first loop from 2.4 m to 0.16 m but
-/// not the final ATE, 0.0441 on the 600-frame drive.)
+/// not the final ATE, 0.0441 on the 600-frame drive with the fused between.)
 ///
 /// Not thread-safe; one Slam per sensor stream.
 
@@ -242,6 +241,7 @@ concept InertialSlamFrontEnd =
       { c.gravity_map_mps2() } -> std::convertible_to<Eigen::Vector3d>;
       { c.T_imu_lidar() } -> std::convertible_to<SE3d>;
       { c.imu_stamp_s(t) } -> std::convertible_to<double>;
+      { c.registered_pose() } -> std::convertible_to<SE3d>;
       o.drop_imu_before(t);
     };
 
@@ -587,12 +587,16 @@ class Slam {
       x.v_world_mps = s ? Eigen::Vector3d(R_world_odom * s->state.v_world_mps) : Eigen::Vector3d::Zero();
       const ImuBias b = s ? s->bias : ImuBias{};
       const double t_imu = odometry_.imu_stamp_s(r.stamp_s);
+      const SE3d T_registered = odometry_.registered_pose();
       const bool first = !has_keyframe();
       const NodeId node = graph_.add_node(t_imu, x, b);
       bool linked = false;
       if (!first) {
         const NodeId prev = last_node();
-        graph_.add_between(prev, node, T_odom_kf_.back().inverse() * T_odom_lidar, odometry_information(r));
+        // The between is the scan-to-map motion, not the LIO's fused poses:
+        // those already hold the IMU, which the IMU factor below adds again
+        // (file comment, "IMU weighting").
+        graph_.add_between(prev, node, T_registered_kf_.back().inverse() * T_registered, odometry_information(r));
         if (s && prev_inertial_) {
           const KeyframeInertialNode& p = graph_.node(prev);
           // Gravity is a constant of the world frame, which is the front end's
@@ -637,6 +641,7 @@ class Slam {
         gauge_relaxed_ = true;
       }
       prev_inertial_ = s.has_value();
+      T_registered_kf_.push_back(T_registered);
       odometry_.drop_imu_before(t_imu);
     }
   }
@@ -853,6 +858,7 @@ class Slam {
   std::size_t thinnings_ = 0;
   std::vector<std::size_t> kept_;          // thinning buffer
   std::vector<SE3d> T_odom_kf_;            // odometry pose of each keyframe
+  std::vector<SE3d> T_registered_kf_;      // inertial: the front end's scan-to-map pose of each keyframe
   std::vector<std::size_t> keyframe_frame_;
   std::vector<SlamLoop> loops_;
   std::vector<SE3d> odom_poses_;           // per frame
