@@ -163,10 +163,10 @@
 /// alone 0.0185 / 0.1033 / 0.1671):
 ///
 ///   drive (urban, revisit, distortion)   fused between      scan-to-map between
-///                                        default  A    B    default   A (expt.)
+///                                        default  A    B    default    A
 ///   600 frames, seed 1, light            0.0200 0.0203 0.0206  0.0189  0.0197
 ///   1000 frames, seed 2, heavy           0.0603 0.0624 0.0578  0.0444  0.0416
-///   800 frames, seed 3, light            0.1139 0.1171 0.1266  0.1103  0.1149
+///   800 frames, seed 3, light            0.1139 0.1171 0.1266  0.1103  0.1149*
 ///
 /// A: IMU 1, lidar 1e4. B: the same with the loops clamped at 1e8.
 /// Drives: semlio_simulate --world urban --revisit --distortion on with
@@ -177,8 +177,8 @@
 /// odometry_information_scale 1e4, max_information 1e12 and
 /// loop_verify.hessian_scale 1e4 (the verifier then clamps the loops at its
 /// max_eigenvalue 1e8; the 1e3 = 3 cm variant of it was worse: 0.0237 /
-/// 0.0605 on the first two drives). "A (expt.)": a local build with the
-/// same scan-to-map between before it was written here. Full weight is
+/// 0.0605 on the first two drives). *: a local build of the same
+/// scan-to-map between before it was written here. Full weight is
 /// worse or mixed in every variant, so the default stays: IMU at 1e-6,
 /// lidar at s = 1. The IMU factors carry velocity, bias and the gravity
 /// direction between keyframes and bridge lidar failures without
