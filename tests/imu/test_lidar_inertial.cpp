@@ -220,15 +220,7 @@ sim::SimulatorConfig drive_config(bool distortion) {
 
 // Exact IMU state (world frame) at time t.
 NavState imu_truth(const sim::Simulator& s, const SE3d& T_imu_lidar, double t) {
-  const auto k = s.ego().state(t);
-  const SE3d T_body_imu = (T_imu_lidar * s.T_body_lidar().inverse()).inverse();
-  const SE3d T_world_imu = k.T_world_body * T_body_imu;
-  NavState x;
-  x.R_world_imu = T_world_imu.so3();
-  x.p_world_m = T_world_imu.translation();
-  x.v_world_mps = k.velocity_world_mps +
-                  k.T_world_body.rotation() * k.angular_velocity_body_radps.cross(T_body_imu.translation());
-  return x;
+  return semlio_test::inertial_truth(s.ego(), T_imu_lidar * s.T_body_lidar().inverse(), t);
 }
 
 // Everything a whole-drive run needs, generated in memory.

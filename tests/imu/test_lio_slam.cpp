@@ -124,6 +124,28 @@ const Drive& drive() {
   return d;
 }
 
+// The LIO settings of every test here: drive()'s extrinsic, a short start-up.
+LidarInertialConfig lio_config() {
+  LidarInertialConfig lc;
+  lc.T_imu_lidar = drive().T_imu_lidar;
+  lc.init.min_frames = 15;  // 1.5 s of poses
+  lc.init.min_duration_s = 1.4;
+  return lc;
+}
+
+// Frame i of drive() through slam, after the IMU samples up to one sweep
+// past its stamp (as semlio_kitti: the IMU must cover the stamp); `next` is
+// the first sample not pushed yet.
+template <typename S>
+SlamFrameReport process_frame(S& slam, std::size_t i, std::size_t& next, double sweep_period_s) {
+  const Drive& d = drive();
+  Scan scan = d.scans[i];
+  while (next < d.imu.size() && d.imu[next].stamp_s <= scan.stamp_s + sweep_period_s + 1e-9) {
+    slam.push_imu(d.imu[next++]);
+  }
+  return slam.process(scan);
+}
+
 struct Run {
   std::vector<SE3d> trajectory;
   std::vector<SlamLoop> loops;
@@ -137,10 +159,7 @@ struct Run {
 // [gap_from_s, gap_to_s)).
 Run run(bool loops, double gap_from_s = 0.0, double gap_to_s = 0.0) {
   const Drive& d = drive();
-  LidarInertialConfig lc;
-  lc.T_imu_lidar = d.T_imu_lidar;
-  lc.init.min_frames = 15;
-  lc.init.min_duration_s = 1.4;
+  const LidarInertialConfig lc = lio_config();
   Slam slam(DriftingLio(lc, 0.003), RadiusLoopDetector({.radius_m = 15.0, .min_time_gap_s = 5.0}),
             SlamConfig{.loop_closure = loops, .loop_interval_s = 0.0});
   static_assert(decltype(slam)::kInertial);
@@ -228,19 +247,11 @@ struct WeightRun {
   double imu_information_scale = 0.0;
 };
 WeightRun run_weights(const SlamConfig& sc, std::size_t frames) {
-  const Drive& d = drive();
-  LidarInertialConfig lc;
-  lc.T_imu_lidar = d.T_imu_lidar;
-  lc.init.min_frames = 15;
-  lc.init.min_duration_s = 1.4;
+  const LidarInertialConfig lc = lio_config();
   Slam slam(ForwardingLio(settings(), lc), RadiusLoopDetector{}, sc);
   std::size_t next = 0;
   for (std::size_t i = 0; i < frames; ++i) {
-    Scan scan = d.scans[i];
-    while (next < d.imu.size() && d.imu[next].stamp_s <= scan.stamp_s + lc.sweep_period_s + 1e-9) {
-      slam.push_imu(d.imu[next++]);
-    }
-    const SlamFrameReport r = slam.process(scan);
+    const SlamFrameReport r = process_frame(slam, i, next, lc.sweep_period_s);
     if (r.graph) REQUIRE(r.graph->ok());
   }
   REQUIRE(slam.loops().empty());
@@ -310,20 +321,10 @@ TEST_CASE("lidar-inertial Slam: between factors measure the scan-to-map motion, 
   // The LIO's fused poses already hold the IMU, which the graph's IMU
   // factors add again (slam.hpp, "IMU weighting"); the betweens take the
   // front end's scan-to-map poses instead.
-  const Drive& d = drive();
-  LidarInertialConfig lc;
-  lc.T_imu_lidar = d.T_imu_lidar;
-  lc.init.min_frames = 15;
-  lc.init.min_duration_s = 1.4;
+  const LidarInertialConfig lc = lio_config();
   Slam slam(RecordingLio(settings(), lc), RadiusLoopDetector{}, SlamConfig{});  // no loop within 6 s
   std::size_t next = 0;
-  for (std::size_t i = 0; i < 60; ++i) {
-    Scan scan = d.scans[i];
-    while (next < d.imu.size() && d.imu[next].stamp_s <= scan.stamp_s + lc.sweep_period_s + 1e-9) {
-      slam.push_imu(d.imu[next++]);
-    }
-    (void)slam.process(scan);
-  }
+  for (std::size_t i = 0; i < 60; ++i) (void)process_frame(slam, i, next, lc.sweep_period_s);
   const RecordingLio& lio = slam.odometry();
   const std::vector<std::size_t>& kf = slam.keyframe_frames();
   const KeyframeInertialGraph& graph = slam.graph();
@@ -520,22 +521,14 @@ struct FullWeightRun {
 // graph update must succeed (before the first IMU factor the first prior
 // holds all 6 DoF, after it the IMU factors hold roll and pitch).
 FullWeightRun run_full_weight(const Eigen::Vector3d& g, bool gravity_gauge) {
-  const Drive& d = drive();
-  LidarInertialConfig lc;
-  lc.T_imu_lidar = d.T_imu_lidar;
-  lc.init.min_frames = 15;
-  lc.init.min_duration_s = 1.4;
+  const LidarInertialConfig lc = lio_config();
   SlamConfig sc{.loop_interval_s = 0.0};
   sc.inertial_graph.imu_information_scale = 1.0;
   sc.inertial_gravity_gauge = gravity_gauge;
   Slam slam(GravityOverrideLio(settings(), lc, g), RadiusLoopDetector({.radius_m = 15.0, .min_time_gap_s = 5.0}), sc);
   std::size_t next = 0;
   for (std::size_t i = 0; i < kFrames; ++i) {
-    Scan scan = d.scans[i];
-    while (next < d.imu.size() && d.imu[next].stamp_s <= scan.stamp_s + lc.sweep_period_s + 1e-9) {
-      slam.push_imu(d.imu[next++]);
-    }
-    const SlamFrameReport r = slam.process(scan);
+    const SlamFrameReport r = process_frame(slam, i, next, lc.sweep_period_s);
     if (r.graph) {
       INFO("frame " << i << ": graph " << to_string(r.graph->status));
       REQUIRE(r.graph->ok());

@@ -662,13 +662,10 @@ class Slam {
   // ceiling to the lidar's real accuracy (inertial_lidar_information_scale;
   // file comment, "IMU weighting"); the floor stays, so a degenerate
   // direction stays weak and the IMU carries it. Lidar-only: as it was.
+  // (Scaling by 1.0 is exact, so lidar-only stays bit for bit.)
   Eigen::Matrix<double, 6, 6> lidar_information(const Eigen::Matrix<double, 6, 6>& Omega) const {
-    if constexpr (kInertial) {
-      const double s = config_.inertial_lidar_information_scale;
-      return detail::clamp_information6(s * Omega, config_.min_information, s * config_.max_information);
-    } else {
-      return detail::clamp_information6(Omega, config_.min_information, config_.max_information);
-    }
+    const double s = kInertial ? config_.inertial_lidar_information_scale : 1.0;
+    return detail::clamp_information6(s * Omega, config_.min_information, s * config_.max_information);
   }
 
   void add_keyframe(const Scan& scan, SlamFrameReport& out, const SE3d& T_odom) {
