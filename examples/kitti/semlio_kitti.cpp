@@ -51,6 +51,7 @@
 
 #include "imu_oxts.hpp"
 #include "json_writer.hpp"
+#include "segmenter_choice.hpp"
 #include "settings_yaml.hpp"
 
 namespace fs = std::filesystem;
@@ -550,13 +551,10 @@ int main(int argc, char** argv) {
                  : run(semlio::make_full_odometry(segmenter, settings), back_end, write_map, frames, first, last_u,
                        opt.quiet);
     };
-    if (geometric) {
-      result = run_preset(semlio::GeometricSegmenter{});
-    } else if (use_labels) {
-      result = run_preset(semlio::ScanLabels{});
-    } else {
-      result = run_preset(semlio::NoLabels{});
-    }
+    result = run_preset(semlio_examples::SegmenterChoice(
+        geometric    ? semlio_examples::SegmenterChoice::Variant(semlio::GeometricSegmenter{})
+        : use_labels ? semlio_examples::SegmenterChoice::Variant(semlio::ScanLabels{})
+                     : semlio_examples::SegmenterChoice::Variant(semlio::NoLabels{})));
 
     // One pose per input frame: skipped frames are interpolated by stamp.
     const std::size_t n = result.reports.size();
