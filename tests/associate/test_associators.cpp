@@ -22,6 +22,8 @@
 #include <semlio_test/associate_scenes.hpp>
 #include <semlio_test/frontend_sim_pair.hpp>
 
+namespace test_associators {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using semlio::Correspondences;
 using semlio::FeatureKind;
@@ -470,3 +472,5 @@ TEST_CASE("Repeated association reuses the output buffer", "[associate]") {
   CHECK(out.data() == data);
   CHECK(first_difference(out, first) == out.size());  // deterministic
 }
+
+}  // namespace test_associators

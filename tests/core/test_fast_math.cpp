@@ -8,6 +8,8 @@
 #include <numbers>
 #include <random>
 
+namespace test_fast_math {  // one namespace per test file: the area compiles as one TU
+
 TEST_CASE("atan2_fast stays within 5e-9 rad of std::atan2 over every octant", "[core][fast_math]") {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -53,3 +55,5 @@ TEST_CASE("atan2_fast special inputs", "[core][fast_math]") {
     prev = v;
   }
 }
+
+}  // namespace test_fast_math

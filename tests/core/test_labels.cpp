@@ -13,6 +13,8 @@
 #include <string_view>
 #include <vector>
 
+namespace test_labels {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 
 namespace {
@@ -205,3 +207,5 @@ TEST_CASE("labels: real SemanticKITTI labels of 50 points of 00/000000", "[core]
   CHECK(hist[static_cast<std::size_t>(semlio::index(Class::kPole))] == 2);
   CHECK(hist[0] == 3);  // other-structure maps to unlabeled
 }
+
+}  // namespace test_labels

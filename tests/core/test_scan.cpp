@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <string>
 
+namespace test_scan {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using semlio::Scan;
 
@@ -180,3 +182,5 @@ TEST_CASE("Scan: label_histogram counts points per learning class", "[core]") {
   unlabeled.points.assign(4, semlio::Point3f::Zero());
   for (const auto v : semlio::label_histogram(unlabeled)) CHECK(v == 0);
 }
+
+}  // namespace test_scan

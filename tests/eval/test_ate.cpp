@@ -12,6 +12,8 @@
 #include <numbers>
 #include <vector>
 
+namespace test_ate {  // one namespace per test file: the area compiles as one TU
+
 using semlio::SE3d;
 using semlio::SO3d;
 using semlio::eval::Alignment;
@@ -233,3 +235,5 @@ TEST_CASE("ATE on real KITTI 04: a linear position drift has closed-form statist
   CHECK(sim3.rmse_m < 1e-9);
   CHECK(semlio::eval::ate(gt, scaled).rmse_m > 0.1);
 }
+
+}  // namespace test_ate

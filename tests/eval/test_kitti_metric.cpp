@@ -13,6 +13,8 @@
 #include <numbers>
 #include <vector>
 
+namespace test_kitti_metric {  // one namespace per test file: the area compiles as one TU
+
 using semlio::SE3d;
 using semlio::SO3d;
 using semlio::eval::KittiMetricConfig;
@@ -260,3 +262,5 @@ TEST_CASE("KITTI metric on real KITTI 04: yaw drift a per frame, closed form", "
     CHECK(std::abs(pl.rotation_error_deg_per_100m - 100.0 * kDegPerRad * s / static_cast<double>(c)) < 1e-9);
   }
 }
+
+}  // namespace test_kitti_metric

@@ -6,6 +6,8 @@
 #include <semlio/core/labels.hpp>
 #include <semlio/eval/miou.hpp>
 
+namespace test_miou {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using semlio::eval::ConfusionMatrix;
 
@@ -59,3 +61,5 @@ TEST_CASE("confusion matrix accumulates and merges frames", "[eval]") {
   const std::vector<Class> none;
   CHECK_THROWS_AS(a.add(one, none), semlio::ValueError);
 }
+
+}  // namespace test_miou

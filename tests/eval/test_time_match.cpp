@@ -8,6 +8,8 @@
 #include <limits>
 #include <vector>
 
+namespace test_time_match {  // one namespace per test file: the area compiles as one TU
+
 using semlio::eval::kNoMatch;
 using semlio::eval::match_nearest_stamps;
 using Matches = std::vector<std::ptrdiff_t>;
@@ -42,3 +44,5 @@ TEST_CASE("time match: unsorted input or a bad tolerance throws ValueError", "[e
   CHECK_THROWS_AS(match_nearest_stamps({0.0}, {0.0}, -1.0), semlio::ValueError);
   CHECK_THROWS_AS(match_nearest_stamps({0.0}, {0.0}, std::numeric_limits<double>::quiet_NaN()), semlio::ValueError);
 }
+
+}  // namespace test_time_match

@@ -14,6 +14,8 @@
 #include <semlio/io/ply.hpp>
 #include <semlio_test/data.hpp>
 
+namespace test_loam_features {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
@@ -297,3 +299,5 @@ TEST_CASE("curvature percentiles on the real scans", "[.percentiles]") {
     print(name, scan);
   }
 }
+
+}  // namespace test_loam_features

@@ -8,6 +8,8 @@
 
 #include <semlio/features/pca.hpp>
 
+namespace test_pca {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 using Eigen::Matrix3d;
@@ -158,3 +160,5 @@ TEST_CASE("fit_local_shape: plane, line, mean and covariance by hand", "[feature
     CHECK(s0.normal.allFinite());
   }
 }
+
+}  // namespace test_pca

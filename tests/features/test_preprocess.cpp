@@ -9,6 +9,8 @@
 #include <semlio/io/kitti.hpp>
 #include <semlio_test/data.hpp>
 
+namespace test_preprocess {  // one namespace per test file: the area compiles as one TU
+
 TEST_CASE("preprocess drops bad points, counts each reason and keeps fields in step", "[features]") {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
@@ -111,3 +113,5 @@ TEST_CASE("ring inference before or after preprocessing gives the same rings on 
     CHECK(rings_after.rings == rings_first.rings);
   }
 }
+
+}  // namespace test_preprocess

@@ -11,6 +11,8 @@
 #include <semlio/io/ply.hpp>
 #include <semlio_test/data.hpp>
 
+namespace test_rings {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
@@ -286,3 +288,5 @@ TEST_CASE("KITTI vertical-angle correction rotates by 0.205 deg about the horizo
   CHECK(scan.points[0].z() == Approx(10.0 * std::sin(theta)));
   CHECK(scan.points[0].y() == 0.0F);
 }
+
+}  // namespace test_rings

@@ -20,6 +20,8 @@
 #include <semlio/imu/preintegration.hpp>
 #include <semlio_test/imu_inertial_drive.hpp>
 
+namespace test_keyframe_inertial_graph {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -480,3 +482,5 @@ TEST_CASE("keyframe inertial graph: the 4-DoF gauge pins position and yaw, not r
   CHECK_THROWS_AS(g.set_prior_information(1, Matrix15d::Identity()), ValueError);  // factor 1 is a between
   CHECK_THROWS_AS(g.set_prior_information(99, Matrix15d::Identity()), ValueError);
 }
+
+}  // namespace test_keyframe_inertial_graph

@@ -11,6 +11,8 @@
 #include <semlio/io/g2o_graph.hpp>
 #include <semlio_test/data.hpp>
 
+namespace test_pose_graph {  // one namespace per test file: the area compiles as one TU
+
 using semlio::ErrorConvention;
 using semlio::ErrorFrame;
 using semlio::Pose2;
@@ -428,3 +430,5 @@ TEST_CASE("the optional trace records every LM iteration with non-increasing chi
   // Without the flag, no trace.
   CHECK(semlio::io::make_pose_graph3(file).optimize().trace.empty());
 }
+
+}  // namespace test_pose_graph

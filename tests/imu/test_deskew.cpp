@@ -23,6 +23,8 @@
 #include <semlio/sim/simulator.hpp>
 #include <semlio/sim/trajectory.hpp>
 
+namespace test_deskew {  // one namespace per test file: the area compiles as one TU
+
 using semlio::ConstantVelocityDeskew;
 using semlio::DeskewTarget;
 using semlio::ImuDeskew;
@@ -413,3 +415,5 @@ TEST_CASE("poses_at_sweep_start re-times a constant-velocity trajectory exactly"
   CHECK(worst(semlio::poses_at_sweep_start(starts, stamps, DeskewTarget::kStart, 0.1)) == 0.0);
   CHECK_THROWS_AS(semlio::poses_at_sweep_start(mids, {0.0}, DeskewTarget::kMiddle, 0.1), semlio::ValueError);
 }
+
+}  // namespace test_deskew

@@ -15,6 +15,8 @@
 #include <semlio/imu/preintegration.hpp>
 #include <semlio_test/imu_inertial_drive.hpp>
 
+namespace test_inertial_graph {  // one namespace per test file: the area compiles as one TU
+
 using semlio::ImuBias;
 using semlio::ImuPreintegration;
 using semlio::InertialGraph;
@@ -219,3 +221,5 @@ TEST_CASE("inertial graph: singular problems give a status and no NaN", "[imu]")
   CHECK_THROWS_AS(g.node(17), semlio::ValueError);
   CHECK_THROWS_AS(InertialGraph({.window_size = 1}), semlio::ConfigError);
 }
+
+}  // namespace test_inertial_graph

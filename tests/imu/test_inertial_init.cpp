@@ -16,6 +16,8 @@
 #include <semlio/sim/rng.hpp>
 #include <semlio_test/imu_inertial_drive.hpp>
 
+namespace test_inertial_init {  // one namespace per test file: the area compiles as one TU
+
 using semlio::InertialInitConfig;
 using semlio::InertialInitStatus;
 using semlio::SE3d;
@@ -168,3 +170,5 @@ TEST_CASE("inertial init: the accel bias needs rotation; failure statuses", "[im
   CHECK_THROWS_AS(semlio::initialize_inertial(std::span(w.stamps).first(3), w.T_map_lidar, s, T_imu_lidar, 0.0, pc),
                   semlio::ValueError);
 }
+
+}  // namespace test_inertial_init

@@ -59,6 +59,8 @@
 
 #include <semlio_test/imu_inertial_drive.hpp>
 
+namespace test_lidar_inertial {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 namespace fs = std::filesystem;
 
@@ -625,3 +627,5 @@ TEST_CASE("OXTS timestamps going backwards: a ValueError naming the file and lin
 }
 
 }  // namespace oxts_cases
+
+}  // namespace test_lidar_inertial

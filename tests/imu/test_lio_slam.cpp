@@ -30,6 +30,8 @@
 #include <semlio/sim/simulator.hpp>
 #include <semlio_test/imu_inertial_drive.hpp>
 
+namespace test_lio_slam {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -728,3 +730,5 @@ TEST_CASE("lidar-inertial Slam at full IMU weight: the gravity gauge estimates a
   CHECK(four.gravity_error_rad < 0.5 * six.gravity_error_rad);
   CHECK(four.median_chi2 < 0.2 * six.median_chi2);
 }
+
+}  // namespace test_lio_slam

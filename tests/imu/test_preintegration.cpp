@@ -17,6 +17,8 @@
 #include <semlio/sim/imu.hpp>
 #include <semlio/sim/trajectory.hpp>
 
+namespace test_preintegration {  // one namespace per test file: the area compiles as one TU
+
 using semlio::ImuBias;
 using semlio::ImuPreintegration;
 using semlio::ImuSample;
@@ -337,3 +339,5 @@ TEST_CASE("ImuBuffer keeps time order and extracts covering ranges", "[imu]") {
   CHECK(buf.samples().front().stamp_s == Approx(0.4));
   CHECK_NOTHROW(buf.covering(0.45, 0.9, 0.2));
 }
+
+}  // namespace test_preintegration

@@ -11,6 +11,8 @@
 #include <semlio/io/g2o_graph.hpp>
 #include <semlio_test/data.hpp>
 
+namespace test_g2o {  // one namespace per test file: the area compiles as one TU
+
 namespace fs = std::filesystem;
 using semlio::io::G2oGraph;
 using semlio::io::read_g2o;
@@ -192,3 +194,5 @@ TEST_CASE("g2o: FIX lines choose the gauge; other tags are skipped and counted",
   semlio::io::write_g2o(f2.path.string(), out);
   CHECK(read_g2o(f2.path.string()).fixed == std::vector<long>{2});
 }
+
+}  // namespace test_g2o

@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+namespace test_kitti {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 using semlio::Class;
@@ -298,3 +300,5 @@ TEST_CASE("times: real prefix reads, round trip, backwards and malformed lines",
   semlio_test::write_text(dir.file("i.txt"), "+1.5\n1.5\n2e0\n");
   CHECK(io::read_kitti_times(dir.file("i.txt")) == std::vector<double>{1.5, 1.5, 2.0});
 }
+
+}  // namespace test_kitti

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+namespace test_kitti_sequence {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 // GCC 12 warns (-Wmissing-field-initializers) on partial designated
@@ -217,3 +219,5 @@ TEST_CASE("sequence: gaps, missing and empty files, bad names, label folder", "[
     CHECK_THROWS_AS(io::KittiSequence(dir.file("s")), semlio::FormatError);
   }
 }
+
+}  // namespace test_kitti_sequence

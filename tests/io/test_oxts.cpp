@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+namespace test_oxts {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 namespace io = semlio::io;
@@ -251,3 +253,5 @@ TEST_CASE("OXTS poses: Mercator projection, relative to the first record", "[io]
   c.pitch_rad = 0.1;
   CHECK((io::oxts_pose_mercator(c, 1.0).rotation() * Eigen::Vector3d::UnitX()).z() == Approx(-std::sin(0.1)));
 }
+
+}  // namespace test_oxts

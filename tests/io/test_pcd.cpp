@@ -16,6 +16,8 @@
 #include <semlio_test/io_cloud_checks.hpp>
 #include <semlio_test/io_cloud_files.hpp>
 
+namespace test_pcd {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 using semlio::Class;
@@ -419,3 +421,5 @@ TEST_CASE("PCD writers round-trip a real KITTI raw scan", "[io]") {
     require_same(in, read_pcd(path));
   }
 }
+
+}  // namespace test_pcd

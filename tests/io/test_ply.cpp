@@ -17,6 +17,8 @@
 #include <semlio_test/io_cloud_checks.hpp>
 #include <semlio_test/io_cloud_files.hpp>
 
+namespace test_ply {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 using semlio::Class;
@@ -377,3 +379,5 @@ TEST_CASE("PLY writer round-trips the real scan with labels", "[io]") {
     CHECK(semlio::label_histogram(out) == semlio::label_histogram(in));
   }
 }
+
+}  // namespace test_ply

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+namespace test_trajectory {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 namespace io = semlio::io;
@@ -155,3 +157,5 @@ TEST_CASE("camera <-> lidar conversion: T_i = Tr^-1 P_i Tr and back", "[io]") {
   const auto back = io::lidar_to_camera(T, Tr);
   for (std::size_t i = 0; i < P.size(); ++i) CHECK(max_diff(back[i], P[i]) < 1e-9);
 }
+
+}  // namespace test_trajectory

@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+namespace test_keyframe_policies {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using semlio::LabelHistogram;
 using semlio::SE3d;
@@ -121,3 +123,5 @@ TEST_CASE("A drastic scene change clamps W_se at its floor", "[keyframe]") {
   evidence.T_lastkf_current = motion(0.11, 0.0);
   CHECK(policy.is_keyframe(evidence));
 }
+
+}  // namespace test_keyframe_policies

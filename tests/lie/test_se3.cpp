@@ -9,6 +9,8 @@
 #include <numbers>
 #include <vector>
 
+namespace test_se3 {  // one namespace per test file: the area compiles as one TU
+
 using semlio::SE3;
 using semlio::SE3d;
 using semlio::SE3f;
@@ -269,3 +271,5 @@ TEST_CASE("SE3 float variant compiles and agrees with double", "[lie]") {
   const Eigen::Vector3f p(1.0F, 2.0F, 3.0F);
   CHECK(((Tf * p).cast<double>() - Td * p.cast<double>()).norm() < 1e-5);
 }
+
+}  // namespace test_se3

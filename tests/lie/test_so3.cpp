@@ -9,6 +9,8 @@
 #include <numbers>
 #include <vector>
 
+namespace test_so3 {  // one namespace per test file: the area compiles as one TU
+
 using semlio::SO3;
 using semlio::SO3d;
 using semlio::SO3f;
@@ -274,3 +276,5 @@ TEST_CASE("SO3 float and double agree and convert with cast", "[lie]") {
   CHECK((Rd.cast<float>().matrix() - Rf.matrix()).norm() < 1e-6F);
   CHECK((Rf.cast<double>().log() - phi).norm() < 1e-6);
 }
+
+}  // namespace test_so3

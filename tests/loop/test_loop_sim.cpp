@@ -16,6 +16,8 @@
 
 #include "loop_fixtures.hpp"
 
+namespace test_loop_sim {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -319,3 +321,5 @@ TEST_CASE("simulated revisit: the loop is verified after a bounded store archive
     CHECK(loop_test::pose_error(T_c, c.T_from_to).first < 0.5);
   }
 }
+
+}  // namespace test_loop_sim

@@ -16,6 +16,8 @@
 
 #include "loop_fixtures.hpp"
 
+namespace test_loop_verifier {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -169,3 +171,5 @@ TEST_CASE("loop closer: detection + verification, statistics", "[loop]") {
   CHECK(st.accepted == 1);
   CHECK(st.verified == st.accepted + st.rejected());
 }
+
+}  // namespace test_loop_verifier

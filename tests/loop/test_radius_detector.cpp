@@ -10,6 +10,8 @@
 
 #include "loop_fixtures.hpp"
 
+namespace test_radius_detector {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -105,3 +107,5 @@ TEST_CASE("radius detector: brute force over 5000 keyframes is fast and exact", 
   INFO("detect over 5000 keyframes: " << ms << " ms");
   CHECK(ms < 5.0);  // measured ~0.02 ms; the bound only catches gross regressions
 }
+
+}  // namespace test_radius_detector

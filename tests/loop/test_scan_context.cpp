@@ -13,6 +13,8 @@
 
 #include "loop_fixtures.hpp"
 
+namespace test_scan_context {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -177,3 +179,5 @@ TEST_CASE("scan context on real KITTI scans: self-similarity and the next frame"
   const ScanContext synth = make_scan_context(synthetic_cloud(5), config);
   CHECK(scan_context_distance(synth, d0).distance > next.distance + 0.1);
 }
+
+}  // namespace test_scan_context

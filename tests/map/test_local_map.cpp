@@ -26,6 +26,8 @@
 #include <semlio/residual/semantic_weighted.hpp>
 #include <semlio_test/associate_scenes.hpp>
 
+namespace test_local_map {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using semlio::LocalMap;
 using semlio::SE3d;
@@ -630,3 +632,5 @@ TEST_CASE("Residual fits reused across iterations give the very same normal equa
   CHECK(require_cached_terms_equal(query.corners, local.corners(), line, line_cache, start, xi) > 100);
   CHECK(line_cache.hits() > query.corners.points.size());
 }
+
+}  // namespace test_local_map

@@ -22,6 +22,8 @@
 #include <semlio_test/data.hpp>
 #include <semlio_test/io_kitti_tmp.hpp>
 
+namespace test_semantic_map {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using semlio::SE3d;
 using semlio::SemanticMap;
@@ -230,3 +232,5 @@ TEST_CASE("semantic map: real SemanticKITTI labels survive a fine map and the PL
   semlio::io::write_ply(path, cloud);
   CHECK(semlio::label_histogram(semlio::io::read_ply(path)) == hist);
 }
+
+}  // namespace test_semantic_map

@@ -33,6 +33,8 @@
 #include <semlio/sim/simulator.hpp>
 #include <semlio_test/data.hpp>
 
+namespace test_deskew_pipeline {  // one namespace per test file: the area compiles as one TU
+
 using semlio::DeskewMode;
 using semlio::DeskewTarget;
 using semlio::PointTimeSource;
@@ -287,3 +289,5 @@ TEST_CASE("real KITTI raw scans: the clockwise time convention lowers the regist
   CHECK(clockwise < counter);
   CHECK(none < counter);  // the wrong spin doubles the distortion
 }
+
+}  // namespace test_deskew_pipeline

@@ -18,6 +18,8 @@
 
 #include <semlio_test/data.hpp>
 
+namespace test_odometry {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -217,3 +219,5 @@ TEST_CASE("Preset robust corners: on by default (first frame plain, the KITTI st
   settings.corner_cauchy_m = std::numeric_limits<double>::quiet_NaN();
   CHECK_THROWS_AS(make_baseline_odometry(ScanLabels{}, settings), ConfigError);
 }
+
+}  // namespace test_odometry

@@ -22,6 +22,8 @@
 #include <numbers>
 #include <vector>
 
+namespace test_registration {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -410,3 +412,5 @@ TEST_CASE("Simulated street frame pairs from identity with the ring-crossing che
     }
   }
 }
+
+}  // namespace test_registration

@@ -25,6 +25,8 @@
 #include <semlio/sim/simulator.hpp>
 #include <semlio_test/data.hpp>
 
+namespace test_slam {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio;
 
 namespace {
@@ -635,3 +637,5 @@ TEST_CASE("Slam's place ceiling: loops to thinned places still close", "[pipelin
   // The semantic map comes from what is kept, so it shrinks with the store.
   CHECK(capped.semantic_map().size() <= open.semantic_map().size());
 }
+
+}  // namespace test_slam

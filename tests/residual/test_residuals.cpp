@@ -17,6 +17,8 @@
 #include <semlio/residual/robust.hpp>
 #include <semlio/residual/semantic_weighted.hpp>
 
+namespace test_residuals {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using semlio::FeaturePoint;
 using semlio::MatchedPoints;
@@ -291,3 +293,5 @@ TEST_CASE("Robust kernels give the IRLS weight of the current residual", "[resid
           semlio::SemanticWeighted<semlio::PointToPlane>{}.evaluate(far, flat, SE3d()).weight);
   }
 }
+
+}  // namespace test_residuals

@@ -14,6 +14,8 @@
 #include <semlio/search/kdtree.hpp>
 #include <semlio/search/small_kdtree.hpp>
 
+namespace test_kdtree {  // one namespace per test file: the area compiles as one TU
+
 namespace {
 
 using Eigen::Vector3f;
@@ -273,3 +275,5 @@ TEST_CASE("KdTree3f concurrent const queries agree with serial ones", "[search]"
   b.join();
   CHECK(parallel == serial);
 }
+
+}  // namespace test_kdtree

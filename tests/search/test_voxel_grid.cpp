@@ -12,6 +12,8 @@
 #include <semlio/search/voxel_grid.hpp>
 #include <semlio_test/data.hpp>
 
+namespace test_voxel_grid {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using Eigen::Vector3f;
 
@@ -117,3 +119,5 @@ TEST_CASE("VoxelGrid on the real KITTI scan", "[search]") {
     REQUIRE(((out[k] - lo).array() <= 0.5F + 1e-4F).all());
   }
 }
+
+}  // namespace test_voxel_grid

@@ -21,6 +21,8 @@
 #include <semlio_test/data.hpp>
 #include <semlio_test/segment_scene.hpp>
 
+namespace test_geometric_segmenter {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 
 namespace {
@@ -250,3 +252,5 @@ TEST_CASE("GeometricSegmenter on a real KITTI scan", "[segment]") {
   REQUIRE(evaluated > 40);
   CHECK(static_cast<double>(agree) >= 0.6 * static_cast<double>(evaluated));
 }
+
+}  // namespace test_geometric_segmenter

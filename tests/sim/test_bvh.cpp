@@ -7,6 +7,8 @@
 #include <semlio/sim/bvh.hpp>
 #include <semlio/sim/random.hpp>
 
+namespace test_bvh {  // one namespace per test file: the area compiles as one TU
+
 using Eigen::Vector3d;
 using semlio::sim::Primitive;
 using semlio::sim::Ray;
@@ -54,3 +56,5 @@ TEST_CASE("BVH over an empty scene hits nothing", "[sim]") {
   semlio::sim::Hit hit;
   CHECK_FALSE(bvh.cast(Ray::make({0, 0, 0}, {1, 0, 0}), 0.0, 100.0, hit));
 }
+
+}  // namespace test_bvh

@@ -6,6 +6,8 @@
 
 #include <semlio/sim/geometry.hpp>
 
+namespace test_geometry {  // one namespace per test file: the area compiles as one TU
+
 using semlio::sim::Primitive;
 using semlio::sim::Ray;
 using semlio::sim::Surface;
@@ -71,3 +73,5 @@ TEST_CASE("ellipsoid distance", "[sim]") {
   // From inside, the exit point is returned.
   CHECK(cast(sphere, {0, 0, 0}, {0, 1, 0}) == Approx(2.0).epsilon(1e-12));
 }
+
+}  // namespace test_geometry

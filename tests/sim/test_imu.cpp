@@ -12,6 +12,8 @@
 #include <semlio/sim/rng.hpp>
 #include <semlio/sim/trajectory.hpp>
 
+namespace test_imu {  // one namespace per test file: the area compiles as one TU
+
 using semlio::ImuSample;
 using semlio::SE3d;
 using semlio::SO3d;
@@ -251,3 +253,5 @@ TEST_CASE("noise generator: deterministic, independent streams, normal moments",
   CHECK(semlio::sim::Xoshiro256::hashed_uniform(1, 2, 3) == semlio::sim::Xoshiro256::hashed_uniform(1, 2, 3));
   CHECK(semlio::sim::Xoshiro256::hashed_uniform(1, 2, 3) != semlio::sim::Xoshiro256::hashed_uniform(1, 2, 4));
 }
+
+}  // namespace test_imu

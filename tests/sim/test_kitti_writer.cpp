@@ -10,6 +10,8 @@
 #include <semlio/io/trajectory.hpp>
 #include <semlio/sim/kitti_writer.hpp>
 
+namespace test_kitti_writer {  // one namespace per test file: the area compiles as one TU
+
 namespace fs = std::filesystem;
 using namespace semlio::sim;
 
@@ -88,3 +90,5 @@ TEST_CASE("writer output is byte-identical for the same seed and any thread coun
   fs::remove_all(a);
   fs::remove_all(b);
 }
+
+}  // namespace test_kitti_writer

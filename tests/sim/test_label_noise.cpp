@@ -12,6 +12,8 @@
 #include <semlio/sim/label_noise.hpp>
 #include <semlio/sim/rng.hpp>
 
+namespace test_label_noise {  // one namespace per test file: the area compiles as one TU
+
 using semlio::Class;
 using semlio::sim::LabelNoise;
 using semlio::sim::LabelNoiseConfig;
@@ -245,3 +247,5 @@ TEST_CASE("azimuth columns follow the RangeNet++ convention", "[sim]") {
   CHECK(cols[3] == 1536);
   CHECK((cols[0] == 0 || cols[0] == 2047));
 }
+
+}  // namespace test_label_noise

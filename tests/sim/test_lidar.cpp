@@ -6,6 +6,8 @@
 
 #include <semlio/sim/lidar.hpp>
 
+namespace test_lidar {  // one namespace per test file: the area compiles as one TU
+
 using semlio::sim::Lidar;
 using semlio::sim::LidarConfig;
 
@@ -96,3 +98,5 @@ TEST_CASE("invalid lidar config names the field", "[sim]") {
   c.rate_hz = 0.0;
   CHECK_THROWS_WITH(Lidar(c), Catch::Contains("rate_hz"));
 }
+
+}  // namespace test_lidar

@@ -8,6 +8,8 @@
 #include <semlio/sim/revisit.hpp>
 #include <semlio/sim/simulator.hpp>
 
+namespace test_revisit {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio::sim;
 
 namespace {
@@ -157,3 +159,5 @@ TEST_CASE("out-and-back loops are closed and fit by regula falsi", "[sim]") {
   CHECK(fit.param == Approx(1.5).margin(0.01));
   CHECK_FALSE(detail::fit_revisit([](double x) { return x + 1.0; }, 0.0, 10.0, 0.01).ok);
 }
+
+}  // namespace test_revisit

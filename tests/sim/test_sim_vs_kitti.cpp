@@ -13,6 +13,8 @@
 #include <semlio_test/data.hpp>
 #include <semlio_test/sim_scan_stats.hpp>
 
+namespace test_sim_vs_kitti {  // one namespace per test file: the area compiles as one TU
+
 TEST_CASE("simulated urban sweeps resemble a real KITTI sweep", "[sim]") {
   const semlio::Scan real = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
   const auto rs = semlio_test::scan_stats(real);
@@ -46,3 +48,5 @@ TEST_CASE("simulated urban sweeps resemble a real KITTI sweep", "[sim]") {
                                << rs.median_ring_count << ", ground " << ground << " vs " << rs.ground_fraction
                                << ", intensity " << intensity << " vs " << rs.mean_intensity << ", range L1 " << l1);
 }
+
+}  // namespace test_sim_vs_kitti

@@ -6,6 +6,8 @@
 
 #include <semlio/sim/simulator.hpp>
 
+namespace test_simulator {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio::sim;
 using semlio::Class;
 using semlio::SE3d;
@@ -200,3 +202,5 @@ TEST_CASE("in-memory ground truth and IMU match the trajectory", "[sim]") {
   // Driving on a flat street: specific force is about +g up, yaw rate small on straights.
   CHECK(imu.samples[150].accel_mps2.z() == Approx(9.80665).margin(0.3));
 }
+
+}  // namespace test_simulator

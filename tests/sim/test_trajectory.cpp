@@ -8,6 +8,8 @@
 #include <semlio/core/error.hpp>
 #include <semlio/sim/trajectory.hpp>
 
+namespace test_trajectory {  // one namespace per test file: the area compiles as one TU
+
 using semlio::sim::Trajectory;
 using semlio::sim::TrajectoryConfig;
 
@@ -278,3 +280,5 @@ TEST_CASE("default-constructed trajectory stands still at the identity", "[sim]"
   CHECK(tr.velocity_world_mps(1.0).norm() == 0.0);
   CHECK(tr.angular_acceleration_body_radps2(1.0).norm() == 0.0);
 }
+
+}  // namespace test_trajectory

@@ -7,6 +7,8 @@
 #include <semlio/core/labels.hpp>
 #include <semlio/sim/world.hpp>
 
+namespace test_world {  // one namespace per test file: the area compiles as one TU
+
 using namespace semlio::sim;
 
 namespace {
@@ -106,3 +108,5 @@ TEST_CASE("aliased world repeats identical blocks", "[sim]") {
   CHECK(buildings % 64 == 0);
   CHECK_THROWS_WITH(parse_world("moon"), Catch::Contains("moon"));
 }
+
+}  // namespace test_world

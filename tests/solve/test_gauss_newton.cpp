@@ -7,6 +7,8 @@
 #include <utility>
 #include <vector>
 
+namespace test_gauss_newton {  // one namespace per test file: the area compiles as one TU
+
 using semlio::SE3d;
 
 namespace {
@@ -417,3 +419,5 @@ TEST_CASE("Gauss-Newton puts weak directions back at the start only when asked",
     }
   }
 }
+
+}  // namespace test_gauss_newton
