@@ -55,6 +55,7 @@
 #include <semlio/core/error.hpp>
 #include <semlio/graph/between_error.hpp>
 #include <semlio/graph/block_system.hpp>
+#include <semlio/graph/dense_kernels.hpp>
 #include <semlio/graph/factors.hpp>
 #include <semlio/graph/pose_graph.hpp>
 #include <semlio/imu/imu_factor.hpp>
@@ -432,28 +433,34 @@ class KeyframeInertialGraph {
     }
   }
 
-  // Adds one factor's J^T W J blocks and J^T W r (IRLS weight w) to the system.
+  // Adds one factor's J^T W J blocks and J^T W r (IRLS weight w) to the
+  // system. The products go through graph/dense_kernels.hpp: as fixed-size
+  // Eigen expressions (15x15 from R x 15, three R) each was its own GEMM
+  // instantiation, tens of seconds of GCC front end in every TU that
+  // includes this header.
   template <int R>
   void accumulate(const Linear<R>& l, double w, int la, int lb, const Handles& h) {
     using Block = Eigen::Matrix<double, 15, 15>;
     Eigen::VectorXd& g = system_.g();
-    const Eigen::Matrix<double, R, R> W = w * l.W;
-    const Eigen::Matrix<double, R, 1> Wr = W * l.r;
+    Eigen::Matrix<double, R, 1> Wr;
+    detail::set_a_b(Wr, l.W, l.r);
+    Wr *= w;
+    Block block;
+    const auto add = [&](const std::array<int, 15>& handle, const Eigen::Matrix<double, R, 15>& A,
+                         const Eigen::Matrix<double, R, 15>& B) {
+      block.setZero();
+      detail::add_at_w_b(block, A, l.W, B, w);
+      system_.add(handle, block);
+    };
     if (la >= 0) {
-      system_.add(h[0], Block(l.J_from.transpose() * W * l.J_from));
-      g.segment<15>(la * 15) += l.J_from.transpose() * Wr;
+      add(h[0], l.J_from, l.J_from);
+      detail::add_at_v(g.segment<15>(la * 15), l.J_from, Wr);
     }
     if (lb >= 0) {
-      system_.add(h[1], Block(l.J_to.transpose() * W * l.J_to));
-      g.segment<15>(lb * 15) += l.J_to.transpose() * Wr;
-      if (la >= 0) {
-        // Lower block: row block max(la, lb), column block min(la, lb).
-        if (lb > la) {
-          system_.add(h[2], Block(l.J_to.transpose() * W * l.J_from));
-        } else {
-          system_.add(h[2], Block(l.J_from.transpose() * W * l.J_to));
-        }
-      }
+      add(h[1], l.J_to, l.J_to);
+      detail::add_at_v(g.segment<15>(lb * 15), l.J_to, Wr);
+      // Lower block: row block max(la, lb), column block min(la, lb).
+      if (la >= 0) lb > la ? add(h[2], l.J_to, l.J_from) : add(h[2], l.J_from, l.J_to);
     }
   }
 
