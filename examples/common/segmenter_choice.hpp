@@ -3,11 +3,13 @@
 //
 // Why not a template argument, as the library's pipelines take it: every
 // instantiation of semlio_kitti's pipelines (Slam with a lidar or an inertial
-// back end, the LIO alone; baseline and full) costs GCC minutes of front end,
-// and one per segmenter tripled the build (~6 CPU minutes of the 2-core CI
-// build). A scan is segmented once per frame, so one std::visit per frame
-// costs nothing measurable against the milliseconds the frame takes.
+// back end, the LIO alone; baseline and full) costs GCC tens of seconds of
+// front end, and one per segmenter tripled their number (18 instead of 6; the
+// TU now compiles in 162 s CPU). A scan is segmented once per frame, so one
+// std::visit per frame costs nothing measurable against the milliseconds the
+// frame takes.
 
+#include <utility>
 #include <variant>
 
 #include <semlio/concepts.hpp>

@@ -436,8 +436,8 @@ class KeyframeInertialGraph {
   // Adds one factor's J^T W J blocks and J^T W r (IRLS weight w) to the
   // system. The products go through graph/dense_kernels.hpp: as fixed-size
   // Eigen expressions (15x15 from R x 15, three R) each was its own GEMM
-  // instantiation, tens of seconds of GCC front end in every TU that
-  // includes this header.
+  // instantiation, ~3 s of GCC 12 front end in every TU that includes this
+  // header.
   template <int R>
   void accumulate(const Linear<R>& l, double w, int la, int lb, const Handles& h) {
     using Block = Eigen::Matrix<double, 15, 15>;
@@ -460,7 +460,13 @@ class KeyframeInertialGraph {
       add(h[1], l.J_to, l.J_to);
       detail::add_at_v(g.segment<15>(lb * 15), l.J_to, Wr);
       // Lower block: row block max(la, lb), column block min(la, lb).
-      if (la >= 0) lb > la ? add(h[2], l.J_to, l.J_from) : add(h[2], l.J_from, l.J_to);
+      if (la >= 0) {
+        if (lb > la) {
+          add(h[2], l.J_to, l.J_from);
+        } else {
+          add(h[2], l.J_from, l.J_to);
+        }
+      }
     }
   }
 
