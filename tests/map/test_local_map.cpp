@@ -152,10 +152,12 @@ TEST_CASE("LocalMap rebuilds by merging equal a from-scratch downsampling bit fo
   corners.labels.clear();
   for (std::size_t i = 0; i < corners.points.size(); ++i) corners.labels.push_back(semlio::class_from_index(static_cast<int>(i % 3)));
   const semlio_test::FeatureCloud& surfaces = f.surfaces;  // unlabeled
-  for (const std::size_t cap : {std::size_t{0}, std::size_t{5}}) {
+  for (const auto& [cap, first_point] : {std::pair{std::size_t{0}, false}, std::pair{std::size_t{5}, false},
+                                         std::pair{std::size_t{0}, true}, std::pair{std::size_t{5}, true}}) {
     semlio::LocalMapConfig config;
     config.radius_m = 20.0;
     config.max_keyframes = cap;
+    config.keep_first_point = first_point;
     LocalMap map(config);
     std::vector<SE3d> poses;
     const auto expect = [&](const LocalMap& m) {
@@ -173,9 +175,10 @@ TEST_CASE("LocalMap rebuilds by merging equal a from-scratch downsampling bit fo
         std::vector<Eigen::Vector3f> ref;
         std::vector<Class> ref_labels;
         semlio::detail::downsample_labelled_reference(merged, labels, corner ? config.corner_leaf_m : config.surface_leaf_m,
-                                                      ref, ref_labels);
+                                                      ref, ref_labels, first_point);
         const semlio::FeatureMap& fm = corner ? m.corners() : m.surfaces();
-        INFO((corner ? "corners" : "surfaces") << ", cap " << cap << ", active " << m.active_keyframes().size());
+        INFO((corner ? "corners" : "surfaces") << ", cap " << cap << ", first point " << first_point << ", active "
+                                                << m.active_keyframes().size());
         REQUIRE(fm.points().size() == ref.size());
         CHECK(fm.points() == ref);
         CHECK(fm.labels() == ref_labels);
@@ -208,6 +211,43 @@ TEST_CASE("LocalMap rebuilds by merging equal a from-scratch downsampling bit fo
     // A step back: no older keyframe enters, the new one is merged in.
     add(SE3d(semlio::SO3d(), Eigen::Vector3d(0.0, 0.5, 0.0)));
     CHECK(map.last_build_merged());
+  }
+}
+
+TEST_CASE("LocalMap with keep_first_point keeps map points in place as keyframes arrive", "[map]") {
+  // Two keyframes whose points share voxels: with centroids the shared
+  // voxels' points move when the second arrives; with keep_first_point every
+  // point of the first build is still in the map, bit for bit, and the
+  // second keyframe only adds points in voxels the first left empty.
+  semlio_test::FeatureCloud cloud;
+  for (int i = 0; i < 40; ++i) {
+    cloud.points.emplace_back(0.05F + 0.1F * static_cast<float>(i), 0.13F, 0.07F);  // a line along x
+  }
+  const SE3d T0;
+  const SE3d T1(semlio::SO3d(), Eigen::Vector3d(0.03, 0.02, 0.0));  // overlaps every voxel of the first
+  const SE3d T2(semlio::SO3d(), Eigen::Vector3d(0.0, 0.5, 0.0));    // a parallel line: voxels of its own
+  for (const bool first_point : {false, true}) {
+    semlio::LocalMapConfig config;
+    config.keep_first_point = first_point;
+    config.corner_leaf_m = 0.2;
+    LocalMap map(config);
+    map.add_keyframe(T0, cloud, cloud);
+    map.build(T0.translation());
+    const std::vector<Eigen::Vector3f> before = map.corners().points();
+    map.add_keyframe(T1, cloud, cloud);
+    map.add_keyframe(T2, cloud, cloud);
+    map.build(T0.translation());
+    const std::vector<Eigen::Vector3f>& after = map.corners().points();
+    std::size_t kept = 0;
+    for (const Eigen::Vector3f& p : before) kept += std::count(after.begin(), after.end(), p) > 0 ? 1U : 0U;
+    INFO("first point " << first_point << ": " << kept << " of " << before.size() << " kept");
+    REQUIRE(before.size() == 20);
+    CHECK(after.size() == 40);  // T2's line adds 20 voxels, T1's none
+    if (first_point) {
+      CHECK(kept == before.size());
+    } else {
+      CHECK(kept == 0);  // T1 moved every shared voxel's centroid
+    }
   }
 }
 

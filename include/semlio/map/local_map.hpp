@@ -3,8 +3,9 @@
 /// The local map of the scan-to-map front end (LIO-SAM's "surrounding
 /// keyframes"): the corner and surface features of the keyframes whose
 /// position lies within a radius of a query position, moved into the map
-/// frame, voxel-downsampled (each voxel: centroid, majority label), with a
-/// k-d tree and a cached normal / line direction per map point (eq. 3-6).
+/// frame, voxel-downsampled (each voxel: centroid, majority label; or, with
+/// keep_first_point, its first point), with a k-d tree and a cached normal /
+/// line direction per map point (eq. 3-6).
 ///
 /// Cost model: build() is the expensive step (transform, voxelise, tree;
 /// normals and candidate lists are filled lazily, see feature_map.hpp); the
@@ -59,6 +60,11 @@ struct LocalMapConfig {
   bool exclude_dynamic = false;  ///< keep movable classes (is_dynamic) out of the map
   int candidate_list = 32;       ///< cached nearest map points per point, for exact fast k-NN (0 = off; FeatureMap)
   std::size_t max_keyframes = 1000;  ///< keyframes stored at most (file comment: which are dropped); 0 = keep all
+  /// Each voxel's point is its first point -- of the oldest active keyframe
+  /// that has one there -- instead of the centroid, so map points stay put
+  /// while keyframes arrive (README, frame time: an experiment towards a map
+  /// whose cached axes survive keyframes). Labels stay the majority.
+  bool keep_first_point = false;
 };
 
 namespace detail {
@@ -66,15 +72,15 @@ namespace detail {
 /// Voxel-grid downsampling with labels, the straightforward reference of
 /// downsample_labelled (same contract, same output bit for bit; kept for the
 /// test that proves it and the benchmark that times both): one output point
-/// per occupied voxel of edge `leaf_m`, at the centroid of its points,
-/// carrying the voxel's majority label (ties: the lowest class id). Output
-/// order is by voxel key, so the result does not depend on the input order.
-/// Non-finite points and points beyond +-2^20 leaves from the origin are
-/// dropped. labels may be empty (all unlabeled).
+/// per occupied voxel of edge `leaf_m`, at the centroid of its points (with
+/// first_point: the voxel's first point in input order), carrying the
+/// voxel's majority label (ties: the lowest class id). Output order is by
+/// voxel key. Non-finite points and points beyond +-2^20 leaves from the
+/// origin are dropped. labels may be empty (all unlabeled).
 inline void downsample_labelled_reference(const std::vector<Eigen::Vector3f>& points,
                                           const std::vector<Class>& labels, double leaf_m,
                                           std::vector<Eigen::Vector3f>& out_points,
-                                          std::vector<Class>& out_labels) {
+                                          std::vector<Class>& out_labels, bool first_point = false) {
   constexpr std::int64_t kHalf = std::int64_t{1} << 20;
   const double inv_leaf = 1.0 / leaf_m;
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
@@ -110,7 +116,7 @@ inline void downsample_labelled_reference(const std::vector<Eigen::Vector3f>& po
       ++votes[static_cast<std::size_t>(index(c))];
       ++e;
     }
-    out_points.push_back((sum / static_cast<double>(e - b)).cast<float>());
+    out_points.push_back(first_point ? points[keyed[b].second] : (sum / static_cast<double>(e - b)).cast<float>());
     const auto best = std::max_element(votes.begin(), votes.end());  // first maximum: lowest id
     out_labels.push_back(class_from_index(static_cast<int>(best - votes.begin())));
     b = e;
@@ -152,11 +158,13 @@ inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEnt
   }
 }
 
-/// Centroid (points summed in entry order) and majority label (ties: the
-/// lowest class id) of each run of equal keys in key-sorted entries.
-/// out_keys, when given, receives each voxel's key (strictly ascending).
+/// Centroid (points summed in entry order; with first_point: the run's first
+/// entry) and majority label (ties: the lowest class id) of each run of
+/// equal keys in key-sorted entries. out_keys, when given, receives each
+/// voxel's key (strictly ascending).
 inline void emit_voxels(const std::vector<MapEntry>& entries, std::vector<Eigen::Vector3f>& out_points,
-                        std::vector<Class>& out_labels, std::vector<std::uint64_t>* out_keys = nullptr) {
+                        std::vector<Class>& out_labels, std::vector<std::uint64_t>* out_keys = nullptr,
+                        bool first_point = false) {
   out_points.clear();
   out_labels.clear();
   if (out_keys != nullptr) out_keys->clear();
@@ -171,7 +179,7 @@ inline void emit_voxels(const std::vector<MapEntry>& entries, std::vector<Eigen:
       one_label = one_label && entries[e].label == entries[b].label;
       ++e;
     }
-    out_points.push_back((sum / static_cast<double>(e - b)).cast<float>());
+    out_points.push_back(first_point ? entries[b].p : (sum / static_cast<double>(e - b)).cast<float>());
     if (out_keys != nullptr) out_keys->push_back(entries[b].key);
     if (one_label) {
       out_labels.push_back(entries[b].label);
@@ -450,7 +458,7 @@ class LocalMap {
     std::vector<Eigen::Vector3f> points;
     std::vector<Class> labels;
     VoxelIndex voxels{.leaf_m = leaf_m, .keys = {}};
-    detail::emit_voxels(m.entries, points, labels, &voxels.keys);
+    detail::emit_voxels(m.entries, points, labels, &voxels.keys, config_.keep_first_point);
     map.build(std::move(points), std::move(labels), config_.shape_neighbours, config_.candidate_list,
               std::move(voxels));
   }
