@@ -260,20 +260,14 @@ class KeyframeInertialGraph {
   [[nodiscard]] std::size_t num_imu_factors() const noexcept { return imus_.size(); }
   /// IMU factor k (0 <= k < num_imu_factors(), in the order added; ValueError otherwise).
   [[nodiscard]] const KeyframeImuFactor& imu_factor(std::size_t k) const {
-    if (k >= imus_.size()) {
-      throw ValueError("KeyframeInertialGraph::imu_factor: " + std::to_string(k) + " of " +
-                       std::to_string(imus_.size()) + " IMU factors");
-    }
+    check_index(k, imus_.size(), "imu_factor", "IMU factors");
     return imus_[k].factor;
   }
   /// Number of pose factors (betweens and loops).
   [[nodiscard]] std::size_t num_pose_factors() const noexcept { return poses_.size(); }
   /// Measured relative pose of pose factor k (in the order added; ValueError otherwise).
   [[nodiscard]] const SE3d& pose_measurement(std::size_t k) const {
-    if (k >= poses_.size()) {
-      throw ValueError("KeyframeInertialGraph::pose_measurement: " + std::to_string(k) + " of " +
-                       std::to_string(poses_.size()) + " pose factors");
-    }
+    check_index(k, poses_.size(), "pose_measurement", "pose factors");
     return poses_[k].measured;
   }
   /// True when the next update() will be a full solve.
@@ -311,6 +305,12 @@ class KeyframeInertialGraph {
     if (node >= nodes_.size()) {
       throw ValueError(std::string("KeyframeInertialGraph::") + what + ": node " + std::to_string(node) +
                        " does not exist (" + std::to_string(nodes_.size()) + " nodes)");
+    }
+  }
+  static void check_index(std::size_t k, std::size_t n, const char* accessor, const char* what) {
+    if (k >= n) {
+      throw ValueError(std::string("KeyframeInertialGraph::") + accessor + ": " + std::to_string(k) + " of " +
+                       std::to_string(n) + " " + what);
     }
   }
   void check_finite(bool finite, const char* what) const {
