@@ -95,8 +95,12 @@ inline constexpr int kMaxCandidateList = 64;
 
 /// How far beyond the distance gate a NearestCache refill searches [m]: a
 /// feature may move this far (less the rounding margin) before a list whose
-/// L-th entry lies beyond the bound must be refilled.
-inline constexpr double kNearestCacheSlackM = 0.5;
+/// L-th entry lies beyond the bound must be refilled. Small, because a
+/// bounded k-d tree query that finds fewer than L points must search its
+/// whole ball: 0.1 instead of 0.5 m cut the full preset's instructions by
+/// 1.9 % on the KITTI raw snippet and 2.0 % on the main job's drive (the
+/// baseline's by 1.2 %) with the same hit and refill counts (callgrind).
+inline constexpr double kNearestCacheSlackM = 0.1;
 
 namespace detail {
 
