@@ -3,7 +3,7 @@
 // taken on a shared, loaded machine stay meaningful. Scans are read before the
 // clock starts (I/O is not part of a frame). Used by scripts/frame_time.sh.
 //   bench_frame_time --sequence DIR [--preset baseline|full] [--labels none|labels|predictions]
-//                    [--last N] [--repeat R]
+//                    [--last N] [--repeat R] [--keep-first-point on|off]
 // Prints one line per frame: index keyframe wall_ms cpu_ms solve_ms map_ms
 // features_ms preprocess_ms iterations, then diagnostics of the surface map:
 // map points, axes fitted so far on this map build, and the surface
@@ -58,6 +58,7 @@ int main(int argc, char** argv) {
   std::string labels = "none";
   long last = -1;
   std::size_t repeat = 1;
+  std::string first_point = "default";
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     const std::string v = argv[i + 1];
@@ -71,13 +72,15 @@ int main(int argc, char** argv) {
       last = std::atol(v.c_str());
     } else if (a == "--repeat") {
       repeat = static_cast<std::size_t>(std::atol(v.c_str()));
+    } else if (a == "--keep-first-point" && (v == "on" || v == "off")) {
+      first_point = v;
     } else {
       std::fprintf(stderr, "bench_frame_time: unknown option %s\n", a.c_str());
       return 2;
     }
   }
   if (sequence.empty()) {
-    std::fprintf(stderr, "usage: bench_frame_time --sequence DIR [--preset baseline|full] [--labels none|labels|predictions] [--last N] [--repeat R]\n");
+    std::fprintf(stderr, "usage: bench_frame_time --sequence DIR [--preset baseline|full] [--labels none|labels|predictions] [--last N] [--repeat R] [--keep-first-point on|off]\n");
     return 2;
   }
   semlio::io::KittiSequenceConfig sc;
@@ -88,6 +91,7 @@ int main(int argc, char** argv) {
   scans.reserve(n);
   for (std::size_t i = 0; i < n; ++i) scans.push_back(seq.read(i));
   semlio::PipelineSettings settings;
+  if (first_point != "default") settings.odometry.map.keep_first_point = first_point == "on";
   settings.odometry.kitti_vertical_correction = !std::filesystem::exists(std::filesystem::path(sequence) / "sim.json");
   const bool use_labels = labels != "none" && seq.has_labels();
   const auto go = [&](auto segmenter) {
