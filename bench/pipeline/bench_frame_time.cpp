@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,7 +59,7 @@ int main(int argc, char** argv) {
   std::string labels = "none";
   long last = -1;
   std::size_t repeat = 1;
-  std::string first_point = "default";
+  std::optional<bool> first_point;  // unset: the library default
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
     const std::string v = argv[i + 1];
@@ -72,8 +73,12 @@ int main(int argc, char** argv) {
       last = std::atol(v.c_str());
     } else if (a == "--repeat") {
       repeat = static_cast<std::size_t>(std::atol(v.c_str()));
-    } else if (a == "--keep-first-point" && (v == "on" || v == "off")) {
-      first_point = v;
+    } else if (a == "--keep-first-point") {
+      if (v != "on" && v != "off") {
+        std::fprintf(stderr, "bench_frame_time: --keep-first-point takes on or off, got %s\n", v.c_str());
+        return 2;
+      }
+      first_point = v == "on";
     } else {
       std::fprintf(stderr, "bench_frame_time: unknown option %s\n", a.c_str());
       return 2;
@@ -91,7 +96,7 @@ int main(int argc, char** argv) {
   scans.reserve(n);
   for (std::size_t i = 0; i < n; ++i) scans.push_back(seq.read(i));
   semlio::PipelineSettings settings;
-  if (first_point != "default") settings.odometry.map.keep_first_point = first_point == "on";
+  if (first_point) settings.odometry.map.keep_first_point = *first_point;
   settings.odometry.kitti_vertical_correction = !std::filesystem::exists(std::filesystem::path(sequence) / "sim.json");
   const bool use_labels = labels != "none" && seq.has_labels();
   const auto go = [&](auto segmenter) {
