@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -203,6 +204,44 @@ TEST_CASE("bad and empty input", "[features]") {
   CHECK(f.surfaces.size() == 0);
   CHECK_THROWS_AS(semlio::LoamFeatureExtractor({.neighbours = 0}), semlio::ConfigError);
   CHECK_THROWS_AS(semlio::LoamFeatureExtractor({.surface_leaf_m = std::nan("")}), semlio::ConfigError);
+  CHECK_THROWS_AS(semlio::LoamFeatureExtractor({.corner_leaf_m = std::nan("")}), semlio::ConfigError);
+  CHECK_THROWS_AS(semlio::LoamFeatureExtractor({.corner_leaf_m = HUGE_VAL}), semlio::ConfigError);
+}
+
+TEST_CASE("corner voxel leaf: one corner per occupied voxel, at the centroid of its corners", "[features]") {
+  semlio::Scan scan = real_kitti("000000.bin");
+  scan.labels.assign(scan.size(), semlio::Class::kPole);
+  semlio::LoamFeatureConfig all_cfg;
+  all_cfg.corner_leaf_m = 0.0;
+  semlio::LoamFeatureConfig leaf_cfg;
+  leaf_cfg.corner_leaf_m = 0.2;
+  semlio::LoamFeatureExtractor all_ex(all_cfg);
+  semlio::LoamFeatureExtractor leaf_ex(leaf_cfg);
+  semlio::LoamFeatures all;
+  semlio::LoamFeatures leafed;
+  all_ex.extract(scan, all);
+  leaf_ex.extract(scan, leafed);
+  // Surfaces do not depend on the corner leaf.
+  CHECK(leafed.surfaces.indices == all.surfaces.indices);
+  // Group the undownsampled corners by voxel (as the voxel grid keys them).
+  const double inv_leaf = 1.0 / leaf_cfg.corner_leaf_m;
+  std::map<std::uint64_t, std::vector<Eigen::Vector3f>> voxels;
+  for (const Eigen::Vector3f& p : all.corners.points) voxels[semlio::voxel_key(p, inv_leaf)].push_back(p);
+  REQUIRE(leafed.corners.size() == voxels.size());
+  CHECK(leafed.corners.size() < all.corners.size());
+  REQUIRE(leafed.corners.labels.size() == leafed.corners.size());
+  REQUIRE(leafed.corners.indices.size() == leafed.corners.size());
+  for (std::size_t k = 0; k < leafed.corners.size(); ++k) {
+    const std::uint32_t i = leafed.corners.indices[k];
+    REQUIRE(i < scan.size());
+    const auto it = voxels.find(semlio::voxel_key(scan.points[i], inv_leaf));
+    REQUIRE(it != voxels.end());  // the representative index is one of the voxel's corners
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3f& p : it->second) mean += p.cast<double>();
+    mean /= static_cast<double>(it->second.size());
+    CHECK((leafed.corners.points[k].cast<double>() - mean).norm() < 1e-5);
+    CHECK(leafed.corners.labels[k] == semlio::Class::kPole);
+  }
 }
 
 TEST_CASE("features of the real KITTI scans", "[features]") {

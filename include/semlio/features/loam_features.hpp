@@ -22,6 +22,9 @@
 /// azimuth gaps). Surfaces: every remaining non-rejected point with c <
 /// surface_threshold_m (all of them, not LIO-SAM's "everything that is not a
 /// corner"), then voxel-downsampled over the whole scan (leaf surface_leaf_m).
+/// Corners may be voxel-downsampled too (corner_leaf_m, centroid and majority
+/// label per voxel), as LIO-SAM does to the current scan with its map's
+/// corner leaf (downsampleCurrentScan, 0.2 m); off by default (see the field).
 ///
 /// Default thresholds, chosen from the measured distribution of c on the real
 /// KITTI scans tests/data/kitti/sequences/00/velodyne/00000{0,1}.bin (rings
@@ -79,6 +82,7 @@ struct LoamFeatureConfig {
   double parallel_beam_ratio = 0.02;          ///< relative range jump marking a grazing beam
   double max_neighbour_gap_rad = 2.0 * std::numbers::pi / 180.0;  ///< larger azimuth gaps break adjacency [rad]
   double surface_leaf_m = 0.4;                ///< surface voxel leaf [m]; <= 0 keeps all surfaces
+  double corner_leaf_m = 0.0;                 ///< corner voxel leaf [m] (LIO-SAM: 0.2); <= 0 keeps all corners
   VoxelPoint surface_point = VoxelPoint::kCentroid;  ///< voxel representative of surfaces
 
   /// Throws ConfigError naming the bad field and value.
@@ -94,6 +98,7 @@ struct LoamFeatureConfig {
     if (!(parallel_beam_ratio > 0.0)) fail("parallel_beam_ratio", parallel_beam_ratio);
     if (!(max_neighbour_gap_rad > 0.0)) fail("max_neighbour_gap_rad", max_neighbour_gap_rad);
     if (std::isnan(surface_leaf_m)) fail("surface_leaf_m", surface_leaf_m);
+    if (std::isnan(corner_leaf_m)) fail("corner_leaf_m", corner_leaf_m);
   }
 };
 
@@ -139,7 +144,9 @@ class LoamFeatureExtractor {
   explicit LoamFeatureExtractor(const Config& config = {})
       : config_(validated(config)),
         voxel_(VoxelGridConfig{.leaf_size_m = config.surface_leaf_m > 0.0 ? config.surface_leaf_m : 1.0,
-                               .point = config.surface_point}) {}
+                               .point = config.surface_point}),
+        corner_voxel_(VoxelGridConfig{.leaf_size_m = config.corner_leaf_m > 0.0 ? config.corner_leaf_m : 1.0,
+                                      .point = VoxelPoint::kCentroid}) {}
 
   /// The settings.
   [[nodiscard]] const Config& config() const { return config_; }
@@ -166,9 +173,15 @@ class LoamFeatureExtractor {
       process_ring(scan, b, e, report, out);
     }
     std::sort(out.corners.indices.begin(), out.corners.indices.end());
-    for (const std::uint32_t i : out.corners.indices) {
-      out.corners.points.push_back(scan.points[i]);
-      if (scan.has_labels()) out.corners.labels.push_back(scan.labels[i]);
+    if (config_.corner_leaf_m > 0.0) {
+      corner_idx_.swap(out.corners.indices);
+      corner_voxel_.downsample(scan.points, scan.labels, corner_idx_, out.corners.points, out.corners.labels,
+                               out.corners.indices);
+    } else {
+      for (const std::uint32_t i : out.corners.indices) {
+        out.corners.points.push_back(scan.points[i]);
+        if (scan.has_labels()) out.corners.labels.push_back(scan.labels[i]);
+      }
     }
     report.surfaces_before_voxel = surface_idx_.size();
     if (config_.surface_leaf_m > 0.0) {
@@ -197,6 +210,9 @@ class LoamFeatureExtractor {
     config.validate();
     if (std::isinf(config.surface_leaf_m)) {
       throw ConfigError("LoamFeatureConfig.surface_leaf_m is invalid: inf");
+    }
+    if (std::isinf(config.corner_leaf_m)) {
+      throw ConfigError("LoamFeatureConfig.corner_leaf_m is invalid: inf");
     }
     return config;
   }
@@ -330,6 +346,7 @@ class LoamFeatureExtractor {
 
   Config config_;
   VoxelGrid voxel_;
+  VoxelGrid corner_voxel_;
   std::vector<float> curvature_;
   std::vector<std::uint8_t> rejected_;
   std::vector<float> azimuth_;
@@ -344,6 +361,7 @@ class LoamFeatureExtractor {
   std::vector<std::uint8_t> picked_;
   std::vector<std::uint32_t> sector_;
   std::vector<std::uint32_t> surface_idx_;
+  std::vector<std::uint32_t> corner_idx_;  // corners before the voxel (swap buffer)
 };
 
 }  // namespace semlio
