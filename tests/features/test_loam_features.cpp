@@ -8,6 +8,7 @@
 #include <random>
 #include <vector>
 
+#include <semlio/core/fast_math.hpp>
 #include <semlio/features/loam_features.hpp>
 #include <semlio/features/preprocess.hpp>
 #include <semlio/features/rings.hpp>
@@ -187,6 +188,93 @@ TEST_CASE("scan order does not matter: rings are sorted by azimuth", "[features]
   REQUIRE(a.corners.size() == b.corners.size());
   for (std::size_t k = 0; k < a.corners.size(); ++k) {
     CHECK(b.corners.indices[a.corners.size() - 1 - k] == 79 - a.corners.indices[k]);
+  }
+}
+
+namespace {
+
+/// LOAM's selection written out literally (full sorts, no buffers), from the
+/// extractor's own curvatures and rejection flags: the corner indices and the
+/// surface indices before the voxel, each ascending.
+void reference_selection(const semlio::Scan& scan, const semlio::LoamFeatureExtractor& ex,
+                         std::vector<std::uint32_t>& corners, std::vector<std::uint32_t>& surfaces) {
+  const auto& cfg = ex.config();
+  const auto h = static_cast<std::size_t>(cfg.neighbours);
+  std::vector<float> az(scan.size());
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const double a = semlio::atan2_fast(static_cast<double>(scan.points[i].y()), static_cast<double>(scan.points[i].x()));
+    az[i] = static_cast<float>(a < 0.0 ? a + 2.0 * std::numbers::pi : a);
+  }
+  std::map<std::uint16_t, std::vector<std::uint32_t>> rings;
+  for (std::uint32_t i = 0; i < scan.size(); ++i) rings[scan.rings[i]].push_back(i);
+  corners.clear();
+  surfaces.clear();
+  for (auto& [ring, idx] : rings) {
+    std::sort(idx.begin(), idx.end(), [&](std::uint32_t a, std::uint32_t b) { return az[a] < az[b] || (az[a] == az[b] && a < b); });
+    const std::size_t m = idx.size();
+    if (m < 2 * h + 1) continue;
+    const auto adjacent = [&](std::size_t k) { return static_cast<double>(az[idx[k + 1]] - az[idx[k]]) <= cfg.max_neighbour_gap_rad; };
+    std::vector<bool> picked(m, false);
+    const std::size_t valid = m - 2 * h;
+    const auto sectors = static_cast<std::size_t>(cfg.sectors);
+    for (std::size_t s = 0; s < sectors; ++s) {
+      const std::size_t sp = h + valid * s / sectors;
+      const std::size_t ep = h + valid * (s + 1) / sectors;
+      std::vector<std::size_t> cand;
+      for (std::size_t k = sp; k < ep; ++k) {
+        if (static_cast<double>(ex.curvatures()[idx[k]]) > cfg.corner_threshold_m) cand.push_back(k);
+      }
+      std::sort(cand.begin(), cand.end(), [&](std::size_t x, std::size_t y) {
+        const float cx = ex.curvatures()[idx[x]];
+        const float cy = ex.curvatures()[idx[y]];
+        return cx > cy || (cx == cy && x < y);
+      });
+      std::size_t taken = 0;
+      for (const std::size_t k : cand) {
+        if (taken >= cfg.max_corners_per_sector) break;
+        if (picked[k] || ex.rejected(idx[k])) continue;
+        corners.push_back(idx[k]);
+        ++taken;
+        picked[k] = true;
+        for (std::size_t j = 1; j <= h && k + j < m && adjacent(k + j - 1); ++j) picked[k + j] = true;
+        for (std::size_t j = 1; j <= h && j <= k && adjacent(k - j); ++j) picked[k - j] = true;
+      }
+      for (std::size_t k = sp; k < ep; ++k) {
+        const float c = ex.curvatures()[idx[k]];
+        if (!picked[k] && !ex.rejected(idx[k]) && c >= 0.0F && static_cast<double>(c) < cfg.surface_threshold_m) {
+          surfaces.push_back(idx[k]);
+        }
+      }
+    }
+  }
+  std::sort(corners.begin(), corners.end());
+  std::sort(surfaces.begin(), surfaces.end());
+}
+
+}  // namespace
+
+TEST_CASE("selection equals a literal LOAM selection on the real scans", "[features]") {
+  semlio::Scan pair = semlio::io::read_ply(semlio_test::data_path("scan_pair/source.ply"));
+  semlio::infer_rings(pair, semlio::SensorModel::hdl32e());
+  semlio::preprocess(pair);
+  std::vector<semlio::Scan> scans = {real_kitti("000000.bin"), real_kitti("000001.bin"), pair};
+  // The same scan with its points in reverse: every ring far from sorted.
+  semlio::Scan reversed;
+  for (std::size_t i = scans[0].size(); i-- > 0;) {
+    reversed.points.push_back(scans[0].points[i]);
+    reversed.rings.push_back(scans[0].rings[i]);
+  }
+  scans.push_back(reversed);
+  for (const semlio::Scan& scan : scans) {
+    semlio::LoamFeatureExtractor ex({.surface_leaf_m = 0.0});
+    semlio::LoamFeatures f;
+    ex.extract(scan, f);
+    std::vector<std::uint32_t> corners;
+    std::vector<std::uint32_t> surfaces;
+    reference_selection(scan, ex, corners, surfaces);
+    CHECK(corners.size() > 1000);
+    CHECK(f.corners.indices == corners);
+    CHECK(f.surfaces.indices == surfaces);
   }
 }
 
