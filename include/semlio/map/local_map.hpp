@@ -475,8 +475,9 @@ class LocalMap {
   std::vector<std::size_t> active_pos_;  // and their positions in keyframes_
   FeatureMap corners_{FeatureKind::kLine};
   FeatureMap surfaces_{FeatureKind::kPlane};
-  // Sorted entries of the last build, per map (32 bytes per merged point,
-  // ~10-20 MB on a full 50 m map; kept so that the next build is a merge).
+  // Sorted entries of the last build, per map (32 bytes per merged point, up
+  // to 36 with the growth headroom, ~10-20 MB on a full 50 m map; kept so
+  // that the next build is a merge).
   MergedMap merged_corners_;
   MergedMap merged_surfaces_;
   std::vector<std::size_t> left_;  // keyframes that left the active set since the last build
