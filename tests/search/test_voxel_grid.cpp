@@ -120,4 +120,36 @@ TEST_CASE("VoxelGrid on the real KITTI scan", "[search]") {
   }
 }
 
+TEST_CASE("A reused VoxelGrid equals a fresh one across calls that grow and shrink its table", "[search]") {
+  // The hash table is sized from the previous call's voxel count and doubles
+  // mid-call when half full; stale slots of earlier calls must read as empty.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-1.0F, 1.0F);
+  semlio::VoxelGrid reused({.leaf_size_m = 0.25});
+  for (const float extent : {0.5F, 40.0F, 1.0F, 200.0F, 3.0F, 60.0F}) {
+    std::vector<Vector3f> pts(20000);
+    std::vector<Class> labels(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      pts[i] = Vector3f(u(rng), u(rng), u(rng)) * extent;
+      labels[i] = static_cast<Class>(i % 3);
+    }
+    semlio::VoxelGrid fresh({.leaf_size_m = 0.25});
+    std::vector<Vector3f> a_pts;
+    std::vector<Vector3f> b_pts;
+    std::vector<Class> a_lab;
+    std::vector<Class> b_lab;
+    std::vector<std::uint32_t> a_idx;
+    std::vector<std::uint32_t> b_idx;
+    reused.downsample(pts, labels, a_pts, a_lab, a_idx);
+    fresh.downsample(pts, labels, b_pts, b_lab, b_idx);
+    CHECK(a_pts == b_pts);
+    CHECK(a_lab == b_lab);
+    CHECK(a_idx == b_idx);
+    // And both count the voxels a set of keys counts.
+    std::set<std::uint64_t> keys;
+    for (const Vector3f& p : pts) keys.insert(semlio::voxel_key(p, 4.0));
+    CHECK(a_pts.size() == keys.size());
+  }
+}
+
 }  // namespace test_voxel_grid
