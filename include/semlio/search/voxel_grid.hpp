@@ -106,7 +106,7 @@ class VoxelGrid {
   /// sizes the hash table for the voxels the last call found, not for the n
   /// points: a scan's ~75 000 surface points fill ~5 000 voxels at 0.4 m,
   /// and a table sized for the points (4 MB) missed the cache on nearly
-  /// every probe. The table doubles whenever it gets half full (insert()).
+  /// every probe. The table doubles whenever it gets half full (push()).
   void begin(std::size_t n) {
     std::size_t cap = 16;
     while (cap < 2 * std::min(n, std::max<std::size_t>(expected_cells_, 64))) cap *= 2;
