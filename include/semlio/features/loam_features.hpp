@@ -103,7 +103,8 @@ struct LoamFeatureConfig {
 };
 
 /// A feature point set: positions (scan frame), labels (empty when the scan
-/// has none) and the index of each point in the input scan (for surfaces, the
+/// has none) and the index of each point in the input scan (for a
+/// voxel-downsampled set -- surfaces, and corners with corner_leaf_m -- the
 /// voxel's first point).
 struct FeatureSet {
   std::vector<Eigen::Vector3f> points;  ///< scan frame [m]
