@@ -75,7 +75,7 @@ concept ReassociatingProblem = LeastSquaresProblem<P> && requires(P& p, const SE
 /// Settings of gauss_newton(); the defaults follow LIO-SAM's scan-to-map solver.
 struct GaussNewtonConfig {
   int max_iterations = 30;                 ///< hard cap on iterations
-  int reassociate_every = 1;               ///< re-associate every n-th iteration (1 = every)
+  int reassociate_every = 1;               ///< re-associate every n-th iteration (1 = every), and before declaring convergence
   bool levenberg_marquardt = false;        ///< damp with lambda * diag(H), accept/reject steps
   double lm_initial_lambda = 1e-4;         ///< initial LM damping (relative to diag(H))
   double translation_tolerance_m = 5e-4;    ///< 0.05 cm, as LIO-SAM; converged when the step is below both tolerances
@@ -231,12 +231,14 @@ SolveStatus iterate(Problem& problem, SE3d& T, const GaussNewtonConfig& config, 
   const bool first_run = report.analyses == 0 && locked == nullptr;
   const auto fail = [](SolveStatus status) { return status; };
 
+  bool refresh = false;  // re-associate now, whatever the schedule (see the convergence test)
   for (int iteration = 0; iteration < config.max_iterations; ++iteration) {
     bool associated = false;  // the residual set may have changed
     if constexpr (ReassociatingProblem<Problem>) {
-      if (config.reassociate_every > 0 && iteration % config.reassociate_every == 0) {
+      if (config.reassociate_every > 0 && (refresh || iteration % config.reassociate_every == 0)) {
         problem.associate(T);
         associated = true;
+        refresh = false;
       }
     }
     eq.reset();
@@ -296,6 +298,16 @@ SolveStatus iterate(Problem& problem, SE3d& T, const GaussNewtonConfig& config, 
 
     if (dx.head<3>().norm() < config.translation_tolerance_m &&
         dx.tail<3>().norm() < config.rotation_tolerance_rad) {
+      if constexpr (ReassociatingProblem<Problem>) {
+        // A small step from correspondences chosen at an earlier pose only
+        // says those correspondences are fitted: re-associate, then decide.
+        // (Stopping there made reassociate_every = 2 converge on the
+        // prediction's matches: ~5x the ATE on the main job's drive.)
+        if (config.reassociate_every > 1 && !associated) {
+          refresh = true;
+          continue;
+        }
+      }
       eq.reset();
       problem.linearize(T, eq);
       if (eq.num_residuals >= config.min_residuals && detail::all_finite(eq)) {
