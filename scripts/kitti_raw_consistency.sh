@@ -13,7 +13,8 @@
 # runs it on the 3 frames in tests/data/kitti_raw/snippet_22 this way);
 # REPORT_ONLY=1 (exit 0 when every run and the analysis complete, whatever the
 # verdict: 3 frames are too few for the bounds, the first step has no
-# velocity to deskew with).
+# velocity to deskew with); EXTRA_CONFIG=FILE.yaml (appended to every run's
+# config, for settings other than deskew, e.g. features: or solver:).
 #
 # KITTI raw sweeps are not motion-compensated. Deskew (imu/deskew.hpp,
 # SweepDeskew) is switched on through a --config YAML file:
@@ -53,6 +54,10 @@ printf 'deskew:\n  mode: none\n' > "$OUT/off_fwd.yaml"
 cp "$OUT/off_fwd.yaml" "$OUT/off_bwd.yaml"
 printf 'deskew:\n  mode: constant_velocity\n  point_times: azimuth\n' > "$OUT/on_fwd.yaml"
 printf 'deskew:\n  mode: constant_velocity\n  point_times: azimuth\n  reverse_time: true\n' > "$OUT/on_bwd.yaml"
+if [ -n "${EXTRA_CONFIG:-}" ]; then
+  if grep -q '^deskew' "$EXTRA_CONFIG"; then echo "EXTRA_CONFIG must not set deskew: (this script does)"; exit 2; fi
+  for f in off_fwd off_bwd on_fwd on_bwd; do cat "$EXTRA_CONFIG" >> "$OUT/$f.yaml"; done
+fi
 
 status=0
 for preset in $PRESETS; do

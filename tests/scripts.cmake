@@ -47,6 +47,12 @@ set_tests_properties(script_bench_association PROPERTIES FAIL_REGULAR_EXPRESSION
 # Frame time per stage (issue #5) on the 3 real KITTI raw frames and a 12-frame drive.
 semlio_add_script_test(frame_time ${CMAKE_COMMAND} -E env FRAMES=12 ${SEMLIO_BASH} scripts/frame_time.sh
   tests/data/kitti_raw/snippet_22)
+# Frame time under settings files (issue #5's speed trade-offs), alternated,
+# on the two real KITTI scans of tests/data.
+file(WRITE "${script_out}/configs/shipped.yaml" "{}\n")
+file(WRITE "${script_out}/configs/reassociate_2.yaml" "solver: {reassociate_every: 2}\n")
+semlio_add_script_test(frame_time_configs ${CMAKE_COMMAND} -E env ROUNDS=2 ${SEMLIO_BASH} scripts/frame_time_configs.sh
+  tests/data/kitti/sequences/00 "${script_out}/configs/shipped.yaml" "${script_out}/configs/reassociate_2.yaml")
 # Lidar-inertial must-holds (issue #7) on 30-frame drives.
 semlio_add_script_test(lio_accuracy ${CMAKE_COMMAND} -E env REPORT_ONLY=1 "OUT_ROOT=${script_out}/lio_accuracy"
   ${SEMLIO_BASH} scripts/lio_accuracy.sh 30 1)
