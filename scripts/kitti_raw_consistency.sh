@@ -55,8 +55,12 @@ cp "$OUT/off_fwd.yaml" "$OUT/off_bwd.yaml"
 printf 'deskew:\n  mode: constant_velocity\n  point_times: azimuth\n' > "$OUT/on_fwd.yaml"
 printf 'deskew:\n  mode: constant_velocity\n  point_times: azimuth\n  reverse_time: true\n' > "$OUT/on_bwd.yaml"
 if [ -n "${EXTRA_CONFIG:-}" ]; then
+  if [ ! -r "$EXTRA_CONFIG" ]; then echo "EXTRA_CONFIG=$EXTRA_CONFIG: no such readable file"; exit 2; fi
   if grep -q '^deskew' "$EXTRA_CONFIG"; then echo "EXTRA_CONFIG must not set deskew: (this script does)"; exit 2; fi
-  for f in off_fwd off_bwd on_fwd on_bwd; do cat "$EXTRA_CONFIG" >> "$OUT/$f.yaml"; done
+  # A bare `{}` (the defaults) after the deskew: mapping would not be YAML.
+  for f in off_fwd off_bwd on_fwd on_bwd; do
+    grep -v '^[[:space:]]*{}[[:space:]]*$' "$EXTRA_CONFIG" >> "$OUT/$f.yaml" || true
+  done
 fi
 
 status=0

@@ -303,7 +303,7 @@ SolveStatus iterate(Problem& problem, SE3d& T, const GaussNewtonConfig& config, 
         // says those correspondences are fitted: re-associate, then decide.
         // (Stopping there made reassociate_every = 2 converge on the
         // prediction's matches: ~5x the ATE on the main job's drive.)
-        if (config.reassociate_every > 1 && !associated) {
+        if (!associated && config.reassociate_every > 0) {
           refresh = true;
           continue;
         }
