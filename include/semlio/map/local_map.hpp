@@ -22,6 +22,14 @@
 /// is dropped can no longer be matched against when the vehicle comes back
 /// -- that is the back end's job (Slam keeps spaced places for loop
 /// closure). Keyframes keep the id add_keyframe() gave them.
+///
+/// Allocation: once the store holds max_keyframes, a dropped keyframe's
+/// buffers take the next keyframe's clouds, and every build buffer (sorted
+/// entries, sort buffers, voxel outputs, the FeatureMaps) is reused, so a
+/// keyframe allocates nothing after warm-up. Until then each keyframe
+/// allocates its stored clouds, and a growing map now and then a larger
+/// buffer; a full rebuild (a corrected pose, a keyframe coming back) sorts
+/// through a map-sized buffer that it frees afterwards.
 
 #include <Eigen/Core>
 
@@ -133,28 +141,64 @@ struct MapEntry {
   Class label;
 };
 
+/// Digit histograms of radix_sort_by_key (6 passes of 2048 buckets, 96 KiB),
+/// kept by callers that sort repeatedly so that a sort allocates nothing.
+struct RadixCounts {
+  static constexpr int kDigit = 11;                                ///< bits per digit
+  static constexpr int kPasses = 6;                                ///< 66 >= 63 key bits
+  static constexpr std::size_t kBuckets = std::size_t{1} << kDigit;  ///< buckets per digit
+  std::vector<std::size_t> count;                                  ///< kPasses * kBuckets, sized on first use
+};
+
 /// Stable LSD radix sort of entries by key (11-bit digits; a digit equal in
 /// every key costs one histogram and no pass). The result is in `entries`.
-inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEntry>& scratch) {
-  constexpr int kDigit = 11;
-  constexpr int kPasses = 6;  // 66 >= 63 key bits
-  constexpr std::size_t kBuckets = std::size_t{1} << kDigit;
+/// Allocation-free once `scratch` and `counts` have grown.
+inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEntry>& scratch, RadixCounts& counts) {
+  constexpr int kDigit = RadixCounts::kDigit;
+  constexpr int kPasses = RadixCounts::kPasses;
+  constexpr std::size_t kBuckets = RadixCounts::kBuckets;
   const std::size_t n = entries.size();
   if (n < 2) return;
-  std::vector<std::array<std::size_t, kBuckets>> count(kPasses);
-  for (auto& c : count) c.fill(0);
+  counts.count.assign(kPasses * kBuckets, 0);
+  const auto histogram = [&counts](int d) { return counts.count.data() + static_cast<std::size_t>(d) * kBuckets; };
   for (const MapEntry& e : entries) {
-    for (int d = 0; d < kPasses; ++d) ++count[static_cast<std::size_t>(d)][(e.key >> (d * kDigit)) & (kBuckets - 1)];
+    for (int d = 0; d < kPasses; ++d) ++histogram(d)[(e.key >> (d * kDigit)) & (kBuckets - 1)];
   }
   scratch.resize(n);
   for (int d = 0; d < kPasses; ++d) {
-    auto& offset = count[static_cast<std::size_t>(d)];
-    if (std::find(offset.begin(), offset.end(), n) != offset.end()) continue;  // one bucket holds all
+    std::size_t* offset = histogram(d);
+    if (std::find(offset, offset + kBuckets, n) != offset + kBuckets) continue;  // one bucket holds all
     std::size_t sum = 0;
-    for (std::size_t& o : offset) sum += std::exchange(o, sum);
+    for (std::size_t b = 0; b < kBuckets; ++b) sum += std::exchange(offset[b], sum);
     const int shift = d * kDigit;
     for (const MapEntry& e : entries) scratch[offset[(e.key >> shift) & (kBuckets - 1)]++] = e;
     entries.swap(scratch);
+  }
+}
+
+/// radix_sort_by_key with histograms of its own (one-off sorts).
+inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEntry>& scratch) {
+  RadixCounts counts;
+  radix_sort_by_key(entries, scratch, counts);
+}
+
+/// Appends the key-sorted `fresh` to the key-sorted `entries` and merges
+/// them, held entries first on equal keys (as std::inplace_merge with the
+/// held ones as the first range), but backwards in place: std::inplace_merge
+/// allocates a temporary buffer on every call. Allocation-free while
+/// `entries` has the capacity.
+inline void merge_sorted_entries(std::vector<MapEntry>& entries, const std::vector<MapEntry>& fresh) {
+  std::size_t i = entries.size();
+  std::size_t j = fresh.size();
+  entries.resize(i + j);
+  std::size_t k = entries.size();
+  while (j > 0) {
+    // Strictly greater: on equal keys the fresh entry goes behind the held one.
+    if (i > 0 && entries[i - 1].key > fresh[j - 1].key) {
+      entries[--k] = entries[--i];
+    } else {
+      entries[--k] = fresh[--j];
+    }
   }
 }
 
@@ -170,12 +214,17 @@ inline void emit_voxels(const std::vector<MapEntry>& entries, std::vector<Eigen:
   if (out_keys != nullptr) out_keys->clear();
   const std::size_t n = entries.size();
   // One pass over the keys sizes the outputs: grown by push_back, each of the
-  // three went through ~20 reallocations per map build.
+  // three went through ~20 reallocations per map build. Outputs that are
+  // reused from build to build regrow with an eighth of headroom, so that a
+  // map whose size hovers stops reallocating.
   std::size_t voxels = n == 0 ? 0 : 1;
   for (std::size_t j = 1; j < n; ++j) voxels += entries[j].key != entries[j - 1].key ? 1U : 0U;
-  out_points.reserve(voxels);
-  out_labels.reserve(voxels);
-  if (out_keys != nullptr) out_keys->reserve(voxels);
+  const auto reserve = [voxels](auto& v) {
+    if (v.capacity() < voxels) v.reserve(v.capacity() == 0 ? voxels : voxels + voxels / 8);
+  };
+  reserve(out_points);
+  reserve(out_labels);
+  if (out_keys != nullptr) reserve(*out_keys);
   std::size_t b = 0;
   while (b < n) {
     std::size_t e = b;
@@ -205,6 +254,7 @@ inline void emit_voxels(const std::vector<MapEntry>& entries, std::vector<Eigen:
 struct DownsampleWorkspace {
   std::vector<MapEntry> entries;  ///< the kept points with their voxel keys
   std::vector<MapEntry> scratch;  ///< the radix sort's second buffer
+  RadixCounts counts;             ///< the radix sort's histograms
 };
 
 /// Voxel-grid downsampling with labels: one output point per occupied voxel
@@ -232,7 +282,7 @@ inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points, cons
     if (!reference_voxel_key(points[i], inv_leaf, key)) continue;
     ws.entries.push_back(MapEntry{key, 0, points[i], labels.empty() ? Class::kUnlabeled : labels[i]});
   }
-  radix_sort_by_key(ws.entries, ws.scratch);
+  radix_sort_by_key(ws.entries, ws.scratch, ws.counts);
   emit_voxels(ws.entries, out_points, out_labels);
 }
 
@@ -280,8 +330,12 @@ class LocalMap {
   /// with the wrong length.
   template <LabelledCloud C1, LabelledCloud C2>
   std::size_t add_keyframe(const SE3d& T_map_kf, const C1& corners, const C2& surfaces) {
-    keyframes_.push_back(Keyframe{next_id_, T_map_kf, keep(corners.points, corners.labels, "corners"),
-                                  keep(surfaces.points, surfaces.labels, "surfaces")});
+    check_labels(corners.points, corners.labels, "corners");
+    check_labels(surfaces.points, surfaces.labels, "surfaces");
+    Keyframe kf{next_id_, T_map_kf, take_spare(), take_spare()};
+    keep(corners.points, corners.labels, kf.corners);
+    keep(surfaces.points, surfaces.labels, kf.surfaces);
+    keyframes_.push_back(std::move(kf));
     return next_id_++;
   }
 
@@ -375,33 +429,59 @@ class LocalMap {
           drop = i;
         }
       }
+      // Its clouds' buffers serve the next keyframes (add_keyframe).
+      spare_clouds_.push_back(std::move(keyframes_[drop].corners));
+      spare_clouds_.push_back(std::move(keyframes_[drop].surfaces));
       keyframes_.erase(keyframes_.begin() + static_cast<std::ptrdiff_t>(drop));
     }
   }
 
-  Cloud keep(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels,
-             const char* what) const {
+  // A dropped keyframe's cloud to refill, else a new one.
+  Cloud take_spare() {
+    if (spare_clouds_.empty()) return {};
+    Cloud c = std::move(spare_clouds_.back());
+    spare_clouds_.pop_back();
+    return c;
+  }
+
+  static void check_labels(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels,
+                           const char* what) {
     if (!labels.empty() && labels.size() != points.size()) {
       throw ValueError(std::string("LocalMap::add_keyframe: ") + what + " has " + std::to_string(points.size()) +
                        " points but " + std::to_string(labels.size()) + " labels");
     }
+  }
+
+  // Copies the kept points (and labels) into c, reusing its buffers: a
+  // recycled cloud (trim()) that is too small regrows with a quarter of
+  // headroom, so that once the store is full the keyframes' varying sizes
+  // soon stop reallocating; a new one takes its exact size.
+  void keep(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels, Cloud& c) const {
     const bool labelled = !labels.empty();
-    Cloud c;
-    c.points.reserve(points.size());
-    if (labelled) c.labels.reserve(points.size());
+    const auto reserve = [n = points.size()](auto& v) {
+      if (v.capacity() < n) v.reserve(v.capacity() == 0 ? n : n + n / 4);
+    };
+    c.points.clear();
+    c.labels.clear();
+    reserve(c.points);
+    if (labelled) reserve(c.labels);
     for (std::size_t i = 0; i < points.size(); ++i) {
       if (config_.exclude_dynamic && labelled && is_dynamic(labels[i])) continue;
       c.points.push_back(points[i]);
       if (labelled) c.labels.push_back(labels[i]);
     }
-    return c;
   }
 
   // The key-sorted entries of one map's last build (see build_one()).
   struct MergedMap {
     std::vector<detail::MapEntry> entries;  // (key, keyframe order, point order)
-    std::vector<detail::MapEntry> scratch;
+    std::vector<detail::MapEntry> scratch;        // a full rebuild's sort buffer (map-sized, freed after)
     std::vector<detail::MapEntry> fresh;
+    std::vector<detail::MapEntry> fresh_scratch;  // the newcomers' sort buffer (kept)
+    detail::RadixCounts counts;
+    std::vector<Eigen::Vector3f> points;          // the voxels handed to the FeatureMap (kept)
+    std::vector<Class> labels;
+    VoxelIndex voxels;
     std::vector<std::size_t> ids;  // the keyframes they hold, ascending
     bool valid = false;
     bool merged = false;  // the last build took the merge path
@@ -414,8 +494,7 @@ class LocalMap {
   // gains keyframes newer than all it held (and loses some), so a build
   // drops the entries of keyframes that left, sorts the new ones and merges
   // them in (the merge keeps the held entries first on equal keys, as their
-  // ids are lower; std::inplace_merge, whose buffer is the size of the
-  // newcomers): linear in the map instead of a sort of it. A keyframe
+  // ids are lower): linear in the map instead of a sort of it. A keyframe
   // that comes back, or a corrected pose, makes a full rebuild.
   void build_one(Cloud Keyframe::*member, double leaf_m, FeatureMap& map, MergedMap& m) {
     const double inv_leaf = 1.0 / leaf_m;
@@ -447,32 +526,26 @@ class LocalMap {
       for (const std::size_t k : active_pos_) {
         if (!held(keyframes_[k].id)) append(keyframes_[k], m.fresh);
       }
-      detail::radix_sort_by_key(m.fresh, m.scratch);
-      const auto held_count = static_cast<std::ptrdiff_t>(m.entries.size());
+      detail::radix_sort_by_key(m.fresh, m.fresh_scratch, m.counts);
       // Growing a map-sized vector copies it into fresh pages; while the map
       // grows that happened on 176 of 428 builds of the main job's drive and
       // cost ~5 ms each (page faults, the copy). An eighth of headroom leaves
       // 40 and still no doubled capacity at rest.
       const std::size_t needed = m.entries.size() + m.fresh.size();
       if (m.entries.capacity() < needed) m.entries.reserve(needed + needed / 8);
-      m.entries.insert(m.entries.end(), m.fresh.begin(), m.fresh.end());
-      std::inplace_merge(m.entries.begin(), m.entries.begin() + held_count, m.entries.end(),
-                         [](const detail::MapEntry& x, const detail::MapEntry& y) { return x.key < y.key; });
+      detail::merge_sorted_entries(m.entries, m.fresh);
     } else {
       m.entries.clear();
       for (const std::size_t k : active_pos_) append(keyframes_[k], m.entries);
-      detail::radix_sort_by_key(m.entries, m.scratch);
+      detail::radix_sort_by_key(m.entries, m.scratch, m.counts);
+      std::vector<detail::MapEntry>().swap(m.scratch);  // map-sized, and only a full rebuild needs it
     }
-    std::vector<detail::MapEntry>().swap(m.scratch);  // only a full rebuild needs it map-sized
     m.ids = active_;
     m.valid = true;
     m.merged = incremental;
-    std::vector<Eigen::Vector3f> points;
-    std::vector<Class> labels;
-    VoxelIndex voxels{.leaf_m = leaf_m, .keys = {}};
-    detail::emit_voxels(m.entries, points, labels, &voxels.keys, config_.keep_first_point);
-    map.build(std::move(points), std::move(labels), config_.shape_neighbours, config_.candidate_list,
-              std::move(voxels));
+    m.voxels.leaf_m = leaf_m;
+    detail::emit_voxels(m.entries, m.points, m.labels, &m.voxels.keys, config_.keep_first_point);
+    map.build(m.points, m.labels, config_.shape_neighbours, config_.candidate_list, m.voxels);
   }
 
   Config config_;
@@ -488,6 +561,7 @@ class LocalMap {
   MergedMap merged_corners_;
   MergedMap merged_surfaces_;
   std::vector<std::size_t> left_;  // keyframes that left the active set since the last build
+  std::vector<Cloud> spare_clouds_;  // buffers of dropped keyframes, refilled by add_keyframe()
 };
 
 }  // namespace semlio
