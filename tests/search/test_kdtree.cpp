@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -11,8 +12,10 @@
 #include <utility>
 #include <vector>
 
+#include <semlio/io/kitti.hpp>
 #include <semlio/search/kdtree.hpp>
 #include <semlio/search/small_kdtree.hpp>
+#include <semlio_test/data.hpp>
 
 namespace test_kdtree {  // one namespace per test file: the area compiles as one TU
 
@@ -171,6 +174,97 @@ TEST_CASE("SmallKdTree3f knn equals KdTree3f knn, also after rebuilds", "[search
     }
   }
   CHECK(compared == 6U * 200U * 4U);
+}
+
+namespace {
+
+// Bounded knn of SmallKdTree3f and KdTree3f at q for several k (one beyond
+// the cloud) and bounds: 0, inf, float max, fixed radii, negative / NaN, and
+// bounds equal to distances found (ties at the bound). Requires identical
+// counts, indices and distances; returns the number of (k, bound) pairs.
+std::size_t require_bounded_equal(const semlio::SmallKdTree3f& small, const semlio::KdTree3f& big,
+                                  const Vector3f& q) {
+  std::size_t compared = 0;
+  const std::size_t n = big.size();
+  std::vector<std::uint32_t> ia(64);
+  std::vector<float> da(64);
+  std::vector<std::uint32_t> ib(64);
+  std::vector<float> db(64);
+  // Distances at several ranks of the unbounded answer serve as bounds.
+  std::array<float, 20> ranked{};
+  const std::size_t nr = big.knn(q, ranked.size(), ib.data(), ranked.data());
+  std::vector<float> bounds{0.0F, 0.01F, 0.25F, 1.0F, 4.0F, 1e9F, std::numeric_limits<float>::max(),
+                            std::numeric_limits<float>::infinity(), -1.0F, std::numeric_limits<float>::quiet_NaN()};
+  for (const std::size_t r : {std::size_t{0}, std::size_t{4}, std::size_t{9}, std::size_t{19}}) {
+    if (r < nr) {
+      bounds.push_back(ranked[r]);
+      bounds.push_back(std::nextafter(ranked[r], 0.0F));  // just below a distance found
+    }
+  }
+  for (const std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{10}, std::size_t{20}, n + 1}) {
+    if (k > ia.size()) continue;
+    for (const float cap : bounds) {
+      const std::size_t na = small.knn(q, k, ia.data(), da.data(), cap);
+      const std::size_t nb = big.knn(q, k, ib.data(), db.data(), cap);
+      INFO("k " << k << " bound " << cap << " size " << n);
+      REQUIRE(na == nb);
+      for (std::size_t i = 0; i < na; ++i) {
+        REQUIRE(ia[i] == ib[i]);
+        REQUIRE(da[i] == db[i]);
+        REQUIRE(da[i] <= cap);
+      }
+      ++compared;
+    }
+  }
+  return compared;
+}
+
+}  // namespace
+
+TEST_CASE("SmallKdTree3f bounded knn equals KdTree3f bounded knn, also after rebuilds", "[search]") {
+  // As the unbounded case above: random clouds of several sizes rebuilt into
+  // the same tree, a grid of equal distances and a duplicate; then real KITTI
+  // points (a map-sized subset of scan 000000, queried with scan 000001).
+  std::mt19937 rng(22);
+  semlio::SmallKdTree3f small;
+  std::size_t compared = 0;
+  for (const std::size_t n : {std::size_t{3000}, std::size_t{1}, std::size_t{9}, std::size_t{700}, std::size_t{0},
+                              std::size_t{4000}}) {
+    std::vector<Vector3f> pts = random_cloud(n, rng, 4.0F);
+    if (n > 100) {
+      for (int x = 0; x < 5; ++x) {
+        for (int y = 0; y < 5; ++y) pts.emplace_back(0.25F * static_cast<float>(x), 0.25F * static_cast<float>(y), 1.0F);
+      }
+      pts.push_back(pts.front());  // a duplicate point
+    }
+    const semlio::KdTree3f big(pts);
+    small.build(pts);
+    std::uniform_real_distribution<float> u(-5.0F, 5.0F);
+    for (int t = 0; t < 100; ++t) {
+      const Vector3f q = t % 4 == 0 && !pts.empty() ? pts[static_cast<std::size_t>(t) % pts.size()]
+                         : t % 4 == 1              ? Vector3f(0.5F, 0.5F, 1.0F)
+                                                   : Vector3f(u(rng), u(rng), u(rng));
+      if (pts.empty()) {
+        std::uint32_t i0 = 0;
+        float d0 = 0.0F;
+        CHECK(small.knn(q, 1, &i0, &d0, 1.0F) == 0);
+        continue;
+      }
+      compared += require_bounded_equal(small, big, q);
+    }
+  }
+  CHECK(compared > 4000U);
+
+  const semlio::Scan s0 = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  const semlio::Scan s1 = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000001.bin"));
+  std::vector<Vector3f> map;
+  for (std::size_t i = 0; i < s0.points.size(); i += 4) map.push_back(s0.points[i]);
+  const semlio::KdTree3f big(map);
+  small.build(map);
+  std::size_t real = 0;
+  for (std::size_t i = 0; i < s1.points.size(); i += 97) real += require_bounded_equal(small, big, s1.points[i]);
+  for (std::size_t i = 0; i < map.size(); i += 211) real += require_bounded_equal(small, big, map[i]);
+  CHECK(real > 10000U);
 }
 
 TEST_CASE("next_up equals std::nextafter on squared distances", "[search]") {

@@ -1,14 +1,15 @@
 #pragma once
 /// \file
-/// SmallKdTree3f: a k-d tree for the per-frame scan side (a few thousand
-/// feature points, rebuilt every frame) that reuses its buffers, so that a
-/// rebuild allocates nothing once they have grown -- unlike KdTree3f, whose
-/// nanoflann index allocates its nodes anew on every build.
+/// SmallKdTree3f: a k-d tree that reuses its buffers, so that a rebuild
+/// allocates nothing once they have grown -- unlike KdTree3f, whose nanoflann
+/// index allocates its nodes anew on every build. Rebuilt often: per frame
+/// for the scan's features, per keyframe for FeatureMap's maps.
 ///
-/// Results equal KdTree3f::knn bit for bit: the exact k nearest by (squared
-/// distance, index), distances summed as nanoflann's L2 metric does
-/// ((dx^2 + dy^2) + dz^2 in float). Pruning is exact too: a subtree is skipped
-/// only when its lower bound exceeds the current k-th distance. The bound
+/// Results equal KdTree3f::knn (also its bounded form) bit for bit: the exact
+/// k nearest by (squared distance, index), distances summed as nanoflann's L2
+/// metric does ((dx^2 + dy^2) + dz^2 in float). Pruning is exact too: a
+/// subtree is skipped only when its lower bound exceeds the current k-th
+/// distance (or, in a bounded query not yet full, the bound). The lower bound
 /// keeps, per axis, the squared offset c_a = fl((q_a - s)^2) of q from the
 /// nearest splitting plane crossed on that axis (|q_a - p_a| >= |q_a - s| for
 /// every point beyond it) and sums them in the metric's order,
@@ -34,7 +35,7 @@ class SmallKdTree3f {
  public:
   /// Copies pts and builds the tree, replacing any previous content. O(n log n).
   void build(const std::vector<Eigen::Vector3f>& pts) {
-    points_.assign(pts.begin(), pts.end());
+    if (&pts != &points_) points_.assign(pts.begin(), pts.end());  // build(points()) rebuilds in place
     order_.resize(points_.size());
     for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = static_cast<std::uint32_t>(i);
     nodes_.clear();
@@ -67,9 +68,22 @@ class SmallKdTree3f {
   /// KdTree3f::knn on the same points. Allocates nothing.
   std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* idx, float* sq_dist) const {
     if (k == 0 || empty()) return 0;
-    Result r{idx, sq_dist, k, 0};
+    Result r{idx, sq_dist, k, 0, 0.0F};
     std::array<float, 3> off{};
-    search(0, q, r, off);
+    search<false>(0, q, r, off);
+    return r.count;
+  }
+
+  /// As knn(q, k, idx, sq_dist), keeping only points with squared distance
+  /// <= max_sq_dist [m^2] (nothing when it is negative or NaN): equal to
+  /// KdTree3f's bounded knn. The bound also prunes the search, so a query far
+  /// from every point costs little. Allocates nothing.
+  std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* idx, float* sq_dist,
+                  float max_sq_dist) const {
+    if (k == 0 || empty() || !(max_sq_dist >= 0.0F)) return 0;
+    Result r{idx, sq_dist, k, 0, max_sq_dist};
+    std::array<float, 3> off{};
+    search<true>(0, q, r, off);
     return r.count;
   }
 
@@ -90,7 +104,11 @@ class SmallKdTree3f {
     float* d2;
     std::size_t k;
     std::size_t count;
+    float cap;  // largest admitted squared distance (bounded searches only)
     [[nodiscard]] bool full() const { return count == k; }
+    // What a point or subtree must not exceed to matter: the k-th distance
+    // once full (<= cap, as every entry is), else the cap.
+    [[nodiscard]] float limit() const { return full() ? d2[k - 1] : cap; }
     // Admits (d, i) when it beats the current k-th by (distance, index).
     void add(float d, std::uint32_t i) { count = detail::insert_by_distance_index(d, i, idx, d2, count, k); }
   };
@@ -133,15 +151,23 @@ class SmallKdTree3f {
     return self;
   }
 
-  // off: per-axis squared offsets of the subtree's region from q (see the file comment).
+  // off: per-axis squared offsets of the subtree's region from q (see the
+  // file comment). Bounded: only points with squared distance <= r.cap; a
+  // template parameter, so that the unbounded search pays nothing for it.
+  template <bool Bounded>
   void search(std::uint32_t node, const Eigen::Vector3f& q, Result& r, std::array<float, 3>& off) const {
     const Node& n = nodes_[node];
     if (n.left == 0) {
       for (std::uint32_t i = n.begin; i < n.end; ++i) {
         const float d = sq_dist(q, leaf_points_[i]);
         // Cheap reject before the (distance, index) insertion: a full list
-        // admits only distances up to its k-th (ties decided by index there).
-        if (r.full() && d > r.d2[r.k - 1]) continue;
+        // admits only distances up to its k-th (ties decided by index there),
+        // a bounded one only distances up to the cap.
+        if constexpr (Bounded) {
+          if (d > r.limit()) continue;
+        } else {
+          if (r.full() && d > r.d2[r.k - 1]) continue;
+        }
         r.add(d, order_[i]);
       }
       return;
@@ -149,14 +175,19 @@ class SmallKdTree3f {
     const float diff = q[n.axis] - n.split;
     const std::uint32_t near = diff <= 0.0F ? n.left : n.right;
     const std::uint32_t far = diff <= 0.0F ? n.right : n.left;
-    search(near, q, r, off);
+    search<Bounded>(near, q, r, off);
     // Every far-side point p has |q_a - p_a| >= |diff| (the split lies between them).
     const float saved = off[n.axis];
     const float cut = diff * diff;
     off[n.axis] = std::max(saved, cut);
     const float bound = (off[0] + off[1]) + off[2];
-    // Skip only when the bound strictly exceeds the k-th distance (ties may still enter by index).
-    if (!r.full() || bound <= r.d2[r.k - 1]) search(far, q, r, off);
+    // Skip only when the bound strictly exceeds the k-th distance (ties may
+    // still enter by index) or, bounded and not yet full, the cap.
+    if constexpr (Bounded) {
+      if (bound <= r.limit()) search<Bounded>(far, q, r, off);
+    } else {
+      if (!r.full() || bound <= r.d2[r.k - 1]) search<Bounded>(far, q, r, off);
+    }
     off[n.axis] = saved;
   }
 
