@@ -17,6 +17,12 @@
 /// thread publishes each entry, any other thread that finds it not ready
 /// computes the same value for itself, so concurrent const queries stay safe.
 ///
+/// The k-d tree is a SmallKdTree3f, not the nanoflann-backed KdTree3f: it
+/// rebuilds in its own buffers, so that (with build() copying its inputs into
+/// reused members) a keyframe's map rebuild allocates nothing once the
+/// buffers have grown, where nanoflann allocates its index anew. Its k-NN
+/// results, bounded or not, equal KdTree3f's bit for bit.
+///
 /// Candidate lists (why Algorithm 1 costs about as much as a 5-NN query):
 /// per map point m, its K nearest map points (K = 32 by default) and the
 /// distance R_m to the K-th. A query q then needs only an anchor m near q
@@ -29,10 +35,11 @@
 /// k-th candidate found in the list (or the distance gate, if fewer lie inside
 /// it) is closer than R_m - a (minus a rounding margin), the list holds the
 /// exact answer. Otherwise nearest() falls back to a full k-NN search. Results
-/// are identical either way: squared distances use nanoflann's float
-/// arithmetic ((dx^2 + dy^2) + dz^2) and ties go to the lower index, as in
-/// KdTree3f (bit equality assumes both are compiled alike, e.g. no FMA
-/// contraction in one and not the other; default x86-64 flags have none).
+/// are identical either way: squared distances use the k-d tree's float
+/// arithmetic ((dx^2 + dy^2) + dz^2, nanoflann's order) and ties go to the
+/// lower index, as in the tree (bit equality assumes both are compiled alike,
+/// e.g. no FMA contraction in one and not the other; default x86-64 flags
+/// have none).
 /// The list also keeps each entry's distance from m (ascending), so its scan
 /// stops at the first entry that cannot come nearer to q than the k-th found
 /// (or the gate): on a sparse corner map the 32 entries reach metres beyond
@@ -66,7 +73,6 @@
 #include <limits>
 #include <thread>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include <semlio/concepts.hpp>
@@ -74,7 +80,7 @@
 #include <semlio/core/labels.hpp>
 #include <semlio/features/pca.hpp>
 #include <semlio/search/k_best.hpp>
-#include <semlio/search/kdtree.hpp>
+#include <semlio/search/small_kdtree.hpp>
 
 namespace semlio {
 
@@ -134,8 +140,9 @@ Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const Eig
   return neighbourhood_axis(tree, kind, idx.data(), n);
 }
 
-/// Squared distance with nanoflann's L2_Simple arithmetic (float, x then y then z),
-/// so that list-based and tree-based candidates compare bit for bit.
+/// Squared distance with nanoflann's L2_Simple arithmetic (float, x then y then
+/// z), which SmallKdTree3f and KdTree3f share, so that list-based and
+/// tree-based candidates compare bit for bit.
 inline float nanoflann_sq_distance(const Eigen::Vector3f& q, const Eigen::Vector3f& p) {
   float r = 0.0F;
   const float dx = q.x() - p.x();
@@ -269,9 +276,10 @@ class FeatureMap {
   /// comment). `voxels` (optional) says which voxel each point stands for.
   /// Throws ValueError on a length mismatch, shape_neighbours outside
   /// [2, 32], candidate_list outside [0, 64], or voxel keys that do not
-  /// ascend strictly. Reuses its buffers.
-  void build(std::vector<Eigen::Vector3f> points, std::vector<Class> labels, int shape_neighbours,
-             int candidate_list = 32, VoxelIndex voxels = {}) {
+  /// ascend strictly. Copies its inputs into buffers it reuses: once they
+  /// have grown, a rebuild allocates nothing.
+  void build(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels, int shape_neighbours,
+             int candidate_list = 32, const VoxelIndex& voxels = {}) {
     if (!labels.empty() && labels.size() != points.size()) {
       throw ValueError("FeatureMap::build: labels has " + std::to_string(labels.size()) +
                        " entries but points has " + std::to_string(points.size()));
@@ -294,11 +302,16 @@ class FeatureMap {
                          " points; expected a leaf > 0 and one strictly ascending key per point");
       }
     }
-    if (labels.empty()) labels.assign(points.size(), Class::kUnlabeled);
-    voxel_keys_ = std::move(voxels.keys);
+    // Copies into the members' own buffers (assign keeps their capacity), so
+    // that a rebuild no larger than an earlier one allocates nothing.
+    if (labels.empty()) {
+      labels_.assign(points.size(), Class::kUnlabeled);
+    } else if (&labels != &labels_) {  // build(points(), labels(), ...) keeps them
+      labels_.assign(labels.begin(), labels.end());
+    }
+    voxel_keys_.assign(voxels.keys.begin(), voxels.keys.end());
     voxel_inv_leaf_ = voxels.leaf_m > 0.0 ? 1.0 / voxels.leaf_m : 0.0;
     shape_neighbours_ = shape_neighbours;
-    labels_ = std::move(labels);
     tree_.build(points);
     const std::size_t n = tree_.size();
     // The first shape_neighbours of a longer k-NN query equal the shorter query
@@ -479,7 +492,7 @@ class FeatureMap {
   /// The neighbourhood size the axes are fitted over.
   [[nodiscard]] int shape_neighbours() const noexcept { return shape_neighbours_; }
   /// The search structure over points().
-  [[nodiscard]] const KdTree3f& tree() const noexcept { return tree_; }
+  [[nodiscard]] const SmallKdTree3f& tree() const noexcept { return tree_; }
   /// Unique id of the last build() (0: never built): a rebuilt map -- even at
   /// the same address -- has a new one, so caches keyed on point indices can
   /// tell when they went stale.
@@ -569,7 +582,7 @@ class FeatureMap {
 
   FeatureKind kind_;
   int shape_neighbours_ = 10;
-  KdTree3f tree_;
+  SmallKdTree3f tree_;  // rebuilt in its own buffers: no allocation once grown
   std::vector<Class> labels_;
   std::size_t list_len_ = 0;
   // Lazy caches (mutable: filled by const queries, see the file comment).
