@@ -24,6 +24,7 @@
 #include <semlio/map/feature_terms.hpp>
 #include <semlio/map/local_map.hpp>
 #include <semlio/residual/semantic_weighted.hpp>
+#include <semlio/search/kdtree.hpp>
 #include <semlio_test/associate_scenes.hpp>
 
 namespace test_local_map {  // one namespace per test file: the area compiles as one TU
@@ -429,6 +430,8 @@ TEST_CASE("FeatureMap::nearest equals a k-d tree k-NN cut at the gate", "[map]")
     semlio::FeatureMap map(semlio::FeatureKind::kPlane);
     map.build(points, {}, 10, list, voxels);
     CHECK(map.candidate_list() == static_cast<std::size_t>(list == 0 ? 0 : std::max(list, 10)));
+    // nanoflann's tree as the reference: independent of the map's own SmallKdTree3f.
+    const semlio::KdTree3f reference(map.points());
     for (const double gate : {0.3, 1.0, std::numeric_limits<double>::infinity()}) {
       for (const std::size_t k : {std::size_t{1}, std::size_t{5}, std::size_t{15}, std::size_t{40}}) {
         std::size_t mismatches = 0;
@@ -438,7 +441,7 @@ TEST_CASE("FeatureMap::nearest equals a k-d tree k-NN cut at the gate", "[map]")
           std::array<std::uint32_t, 64> ib{};
           std::array<float, 64> db{};
           const std::size_t na = map.nearest(q, k, gate * gate, ia.data(), da.data());
-          std::size_t nb = map.tree().knn(q, k, ib.data(), db.data());
+          std::size_t nb = reference.knn(q, k, ib.data(), db.data());
           while (nb > 0 && !(static_cast<double>(db[nb - 1]) <= gate * gate)) --nb;
           bool same = na == nb;
           for (std::size_t j = 0; same && j < na; ++j) same = ia[j] == ib[j] && da[j] == db[j];
@@ -477,6 +480,7 @@ TEST_CASE("FeatureMap::nearest with a NearestCache equals a k-d tree k-NN cut at
   const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.4);
   semlio::FeatureMap map(semlio::FeatureKind::kPlane);
   map.build(cloud.points, {}, 10, 32);
+  const semlio::KdTree3f reference(map.points());  // nanoflann, independent of the map's tree
   std::mt19937 rng(11);
   std::uniform_int_distribution<std::size_t> pick(0, cloud.points.size() - 1);
   std::normal_distribution<float> jitter(0.0F, 1.0F);
@@ -498,7 +502,7 @@ TEST_CASE("FeatureMap::nearest with a NearestCache equals a k-d tree k-NN cut at
             std::array<std::uint32_t, 64> ib{};
             std::array<float, 64> db{};
             const std::size_t na = map.nearest(q, k, gate * gate, ia.data(), da.data(), cache, w);
-            std::size_t nb = map.tree().knn(q, k, ib.data(), db.data());
+            std::size_t nb = reference.knn(q, k, ib.data(), db.data());
             while (nb > 0 && !(static_cast<double>(db[nb - 1]) <= gate * gate)) --nb;
             bool same = na == nb;
             for (std::size_t j = 0; same && j < na; ++j) same = ia[j] == ib[j] && da[j] == db[j];
