@@ -3,7 +3,8 @@
 // (corners and surfaces), accumulate residuals + Jacobians into the 6x6
 // normal equations, solve, update -- per associator / residual pair. Also the
 // accumulation alone (ScanToMapProblem::linearize) and the search-structure
-// builds (k-d tree alone; FeatureMap = tree + cached axes + candidate lists).
+// builds (k-d trees alone; FeatureMap = tree + cached axes + candidate lists)
+// and the map k-NN queries FeatureMap makes, by KdTree3f and SmallKdTree3f.
 // Items = scan features (iteration, accumulation) or map points (builds).
 #include <benchmark/benchmark.h>
 
@@ -24,6 +25,7 @@
 #include <semlio/residual/point_to_plane.hpp>
 #include <semlio/residual/semantic_weighted.hpp>
 #include <semlio/search/kdtree.hpp>
+#include <semlio/search/small_kdtree.hpp>
 #include <semlio/solve/normal_equations.hpp>
 #include <semlio_test/associate_scenes.hpp>
 
@@ -123,6 +125,55 @@ void BM_KdTreeBuild(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(points.size()));
 }
 
+// SmallKdTree3f (FeatureMap's tree) over the same points, rebuilt in place.
+void BM_SmallKdTreeBuild(benchmark::State& state) {
+  const std::vector<Eigen::Vector3f>& points = kitti().map.surfaces().points();
+  semlio::SmallKdTree3f tree;
+  for (auto _ : state) {
+    tree.build(points);
+    benchmark::DoNotOptimize(&tree);
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(points.size()));
+}
+
+// The k-NN queries FeatureMap sends its tree, on the surface map, by each
+// tree: kRefill = a NearestCache refill (20 nearest within (1 m + 0.1 m)^2,
+// at the scan's surface features moved by the starting guess), kList = a
+// candidate list (32 nearest, unbounded, at every map point).
+enum class MapQuery { kRefill, kList };
+
+template <typename Tree>
+void BM_MapKnn(benchmark::State& state, MapQuery query) {
+  const KittiPair& p = kitti();
+  const std::vector<Eigen::Vector3f>& points = p.map.surfaces().points();
+  const Tree tree = [&] {
+    Tree t;
+    t.build(points);
+    return t;
+  }();
+  std::vector<Eigen::Vector3f> queries;
+  if (query == MapQuery::kRefill) {
+    const Eigen::Matrix3f R = p.T_init.rotation().cast<float>();
+    const Eigen::Vector3f t = p.T_init.translation().cast<float>();
+    for (const auto& f : p.surfaces.points) queries.emplace_back(R * f + t);
+  } else {
+    queries = points;
+  }
+  const std::size_t k = query == MapQuery::kRefill ? 20 : 32;
+  const float bound2 = semlio::detail::float_gate(1.1 * 1.1);
+  std::vector<std::uint32_t> idx(k);
+  std::vector<float> d2(k);
+  std::size_t found = 0;
+  for (auto _ : state) {
+    for (const auto& q : queries) {
+      found += query == MapQuery::kRefill ? tree.knn(q, k, idx.data(), d2.data(), bound2)
+                                          : tree.knn(q, k, idx.data(), d2.data());
+    }
+    benchmark::DoNotOptimize(found);
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations()) * static_cast<std::int64_t>(queries.size()));
+}
+
 // A FeatureMap over the surface map's points: tree + 10-point axes +
 // candidate lists (candidate_list = 0: tree + axes only).
 void BM_FeatureMapBuild(benchmark::State& state, int candidate_list) {
@@ -155,6 +206,16 @@ int main(int argc, char** argv) {
                                weighted)
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("KdTreeBuild/kitti_surface_map", BM_KdTreeBuild)->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("SmallKdTreeBuild/kitti_surface_map", BM_SmallKdTreeBuild)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("MapKnn/refill/KdTree3f", BM_MapKnn<semlio::KdTree3f>, MapQuery::kRefill)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("MapKnn/refill/SmallKdTree3f", BM_MapKnn<semlio::SmallKdTree3f>, MapQuery::kRefill)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("MapKnn/list/KdTree3f", BM_MapKnn<semlio::KdTree3f>, MapQuery::kList)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("MapKnn/list/SmallKdTree3f", BM_MapKnn<semlio::SmallKdTree3f>, MapQuery::kList)
+      ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("FeatureMapBuild/kitti_surface_map/no_lists", BM_FeatureMapBuild, 0)
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("FeatureMapBuild/kitti_surface_map/lists32", BM_FeatureMapBuild, 32)
