@@ -4,6 +4,7 @@
 /// a tool: include <semlio/sim/simulator.hpp> for it).
 
 #include <semlio/concepts.hpp>
+#include <semlio/core/buffers.hpp>
 #include <semlio/core/error.hpp>
 #include <semlio/core/labels.hpp>
 #include <semlio/core/logger.hpp>

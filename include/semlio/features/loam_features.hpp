@@ -165,6 +165,7 @@ class LoamFeatureExtractor {
     const std::size_t n = scan.size();
     curvature_.assign(n, -1.0F);
     group_by_ring(scan);
+    reserve_ring_buffers(n);
     surface_idx_.clear();
     for (std::size_t r = 0; r + 1 < ring_begin_.size(); ++r) {
       const std::size_t b = ring_begin_[r];
@@ -275,6 +276,22 @@ class LoamFeatureExtractor {
       *j = v;
     }
     return true;
+  }
+
+  /// Sizes the per-ring buffers for the longest ring a scan of n points can
+  /// have, n (26 bytes per point): grown ring by ring to the exact length,
+  /// they reallocated whenever a later scan had a longer ring, long after
+  /// warm-up (3-9 blocks on such frames of a drive).
+  void reserve_ring_buffers(std::size_t n) {
+    const auto reserve = [n](auto& v) {
+      if (v.capacity() < n) v.reserve(n);
+    };
+    reserve(ring_pts_);
+    reserve(ring_az_);
+    reserve(range_);
+    reserve(ring_c_);
+    reserve(ring_rej_);
+    reserve(picked_);
   }
 
   /// Eq. 2, rejection and selection on the ring order_[b, e). The ring's

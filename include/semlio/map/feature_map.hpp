@@ -76,6 +76,7 @@
 #include <vector>
 
 #include <semlio/concepts.hpp>
+#include <semlio/core/buffers.hpp>
 #include <semlio/core/error.hpp>
 #include <semlio/core/labels.hpp>
 #include <semlio/features/pca.hpp>
@@ -304,6 +305,10 @@ class FeatureMap {
     }
     // Copies into the members' own buffers (assign keeps their capacity), so
     // that a rebuild no larger than an earlier one allocates nothing.
+    // Rebuilds of a map that grows by a little each time (keyframes) would
+    // otherwise reallocate every buffer every time (core/buffers.hpp).
+    reserve_with_headroom(labels_, points.size());
+    reserve_with_headroom(voxel_keys_, voxels.keys.size());
     if (labels.empty()) {
       labels_.assign(points.size(), Class::kUnlabeled);
     } else if (&labels != &labels_) {  // build(points(), labels(), ...) keeps them
@@ -319,6 +324,12 @@ class FeatureMap {
     list_len_ = candidate_list == 0
                     ? 0
                     : std::min<std::size_t>(n, static_cast<std::size_t>(std::max(candidate_list, shape_neighbours)));
+    reserve_with_headroom(axes_, n);
+    reserve_with_headroom(axis_state_, n);
+    reserve_with_headroom(lists_, n * list_len_);
+    reserve_with_headroom(list_dist_m_, n * list_len_);
+    reserve_with_headroom(list_radius_m_, list_len_ == 0 ? 0 : n);
+    reserve_with_headroom(list_state_, list_len_ == 0 ? 0 : n);
     axes_.resize(n);
     axis_state_.assign(n, kEmpty);
     lists_.resize(n * list_len_);

@@ -44,6 +44,7 @@
 #include <utility>
 #include <vector>
 
+#include <semlio/core/buffers.hpp>
 #include <semlio/core/error.hpp>
 #include <semlio/core/labels.hpp>
 #include <semlio/lie/se3.hpp>
@@ -214,17 +215,13 @@ inline void emit_voxels(const std::vector<MapEntry>& entries, std::vector<Eigen:
   if (out_keys != nullptr) out_keys->clear();
   const std::size_t n = entries.size();
   // One pass over the keys sizes the outputs: grown by push_back, each of the
-  // three went through ~20 reallocations per map build. Outputs that are
-  // reused from build to build regrow with an eighth of headroom, so that a
-  // map whose size hovers stops reallocating.
+  // three went through ~20 reallocations per map build. Outputs reused from
+  // build to build regrow with headroom (core/buffers.hpp).
   std::size_t voxels = n == 0 ? 0 : 1;
   for (std::size_t j = 1; j < n; ++j) voxels += entries[j].key != entries[j - 1].key ? 1U : 0U;
-  const auto reserve = [voxels](auto& v) {
-    if (v.capacity() < voxels) v.reserve(v.capacity() == 0 ? voxels : voxels + voxels / 8);
-  };
-  reserve(out_points);
-  reserve(out_labels);
-  if (out_keys != nullptr) reserve(*out_keys);
+  reserve_with_headroom(out_points, voxels);
+  reserve_with_headroom(out_labels, voxels);
+  if (out_keys != nullptr) reserve_with_headroom(*out_keys, voxels);
   std::size_t b = 0;
   while (b < n) {
     std::size_t e = b;
@@ -540,6 +537,7 @@ class LocalMap {
       detail::radix_sort_by_key(m.entries, m.scratch, m.counts);
       std::vector<detail::MapEntry>().swap(m.scratch);  // map-sized, and only a full rebuild needs it
     }
+    reserve_with_headroom(m.ids, active_.size());
     m.ids = active_;
     m.valid = true;
     m.merged = incremental;

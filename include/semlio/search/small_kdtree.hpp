@@ -25,6 +25,7 @@
 #include <limits>
 #include <vector>
 
+#include <semlio/core/buffers.hpp>
 #include <semlio/search/k_best.hpp>
 
 namespace semlio {
@@ -35,6 +36,11 @@ class SmallKdTree3f {
  public:
   /// Copies pts and builds the tree, replacing any previous content. O(n log n).
   void build(const std::vector<Eigen::Vector3f>& pts) {
+    // Headroom (core/buffers.hpp): a map or scan a little larger than the
+    // last one does not reallocate every buffer.
+    reserve_with_headroom(points_, pts.size());
+    reserve_with_headroom(order_, pts.size());
+    reserve_with_headroom(leaf_points_, pts.size());
     if (&pts != &points_) points_.assign(pts.begin(), pts.end());  // build(points()) rebuilds in place
     order_.resize(points_.size());
     for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = static_cast<std::uint32_t>(i);
@@ -43,7 +49,7 @@ class SmallKdTree3f {
     // Split nodes hold > kLeaf points, so every leaf holds >= kLeaf / 2 (or all
     // n): at most 2n / (kLeaf / 2) + 1 nodes. Reserved so the vector keeps its
     // capacity from frame to frame.
-    nodes_.reserve(2 * (points_.size() / (kLeaf / 2) + 1) + 1);
+    reserve_with_headroom(nodes_, 2 * (points_.size() / (kLeaf / 2) + 1) + 1);
     build_node(0, static_cast<std::uint32_t>(points_.size()));
     // Leaves scan their points in tree order: a contiguous copy spares the
     // indirection (and its cache misses) in the innermost loop.
