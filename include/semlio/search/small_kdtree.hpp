@@ -41,10 +41,16 @@ class SmallKdTree3f {
     reserve_with_headroom(points_, pts.size());
     reserve_with_headroom(order_, pts.size());
     reserve_with_headroom(leaf_points_, pts.size());
+    reserve_with_headroom(work_, pts.size());
     if (&pts != &points_) points_.assign(pts.begin(), pts.end());  // build(points()) rebuilds in place
-    order_.resize(points_.size());
-    for (std::size_t i = 0; i < order_.size(); ++i) order_[i] = static_cast<std::uint32_t>(i);
+    // The splits partition (point, index) pairs in one contiguous array: an
+    // index array partitioned through a comparator that looks each point up
+    // made the build ~1.8x nanoflann's (README, frame time).
+    work_.resize(points_.size());
+    for (std::size_t i = 0; i < work_.size(); ++i) work_[i] = Entry{points_[i], static_cast<std::uint32_t>(i)};
     nodes_.clear();
+    order_.clear();
+    leaf_points_.clear();
     if (points_.empty()) return;
     // Split nodes hold > kLeaf points, so every leaf holds >= kLeaf / 2 (or all
     // n): at most 2n / (kLeaf / 2) + 1 nodes. Reserved so the vector keeps its
@@ -53,8 +59,12 @@ class SmallKdTree3f {
     build_node(0, static_cast<std::uint32_t>(points_.size()));
     // Leaves scan their points in tree order: a contiguous copy spares the
     // indirection (and its cache misses) in the innermost loop.
-    leaf_points_.resize(order_.size());
-    for (std::size_t i = 0; i < order_.size(); ++i) leaf_points_[i] = points_[order_[i]];
+    order_.resize(work_.size());
+    leaf_points_.resize(work_.size());
+    for (std::size_t i = 0; i < work_.size(); ++i) {
+      order_[i] = work_[i].index;
+      leaf_points_[i] = work_[i].p;
+    }
   }
 
   /// Number of points.
@@ -133,20 +143,20 @@ class SmallKdTree3f {
     nodes_.push_back(Node{begin, end, 0, 0, 0.0F, 0});
     if (end - begin <= kLeaf) return self;
     // Split the widest extent at the median point.
-    Eigen::Vector3f lo = points_[order_[begin]];
+    Eigen::Vector3f lo = work_[begin].p;
     Eigen::Vector3f hi = lo;
     for (std::uint32_t i = begin + 1; i < end; ++i) {
-      lo = lo.cwiseMin(points_[order_[i]]);
-      hi = hi.cwiseMax(points_[order_[i]]);
+      lo = lo.cwiseMin(work_[i].p);
+      hi = hi.cwiseMax(work_[i].p);
     }
     Eigen::Index axis = 0;
     (hi - lo).maxCoeff(&axis);
     const std::uint32_t mid = begin + (end - begin) / 2;
     const auto a = static_cast<Eigen::Index>(axis);
-    std::nth_element(order_.begin() + begin, order_.begin() + mid, order_.begin() + end,
-                     [&](std::uint32_t x, std::uint32_t y) { return points_[x][a] < points_[y][a]; });
-    // Left: order_[begin, mid) with coordinate <= split; right: [mid, end) with >= split.
-    const float split = points_[order_[mid]][a];
+    std::nth_element(work_.begin() + begin, work_.begin() + mid, work_.begin() + end,
+                     [a](const Entry& x, const Entry& y) { return x.p[a] < y.p[a]; });
+    // Left: [begin, mid) with coordinate <= split; right: [mid, end) with >= split.
+    const float split = work_[mid].p[a];
     const std::uint32_t left = build_node(begin, mid);
     const std::uint32_t right = build_node(mid, end);
     Node& n = nodes_[self];
@@ -197,7 +207,13 @@ class SmallKdTree3f {
     off[n.axis] = saved;
   }
 
+  struct Entry {
+    Eigen::Vector3f p;
+    std::uint32_t index;
+  };
+
   std::vector<Eigen::Vector3f> points_;
+  std::vector<Entry> work_;  // build(): the (point, index) pairs being partitioned
   std::vector<std::uint32_t> order_;
   std::vector<Eigen::Vector3f> leaf_points_;  // points_[order_[i]], for the leaf loops
   std::vector<Node> nodes_;
