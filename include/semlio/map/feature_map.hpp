@@ -307,8 +307,8 @@ class FeatureMap {
     // that a rebuild no larger than an earlier one allocates nothing.
     // Rebuilds of a map that grows by a little each time (keyframes) would
     // otherwise reallocate every buffer every time (core/buffers.hpp).
-    reserve_with_headroom(labels_, points.size());
-    reserve_with_headroom(voxel_keys_, voxels.keys.size());
+    if (&labels != &labels_) reserve_discarding(labels_, points.size());
+    if (&voxels.keys != &voxel_keys_) reserve_discarding(voxel_keys_, voxels.keys.size());
     if (labels.empty()) {
       labels_.assign(points.size(), Class::kUnlabeled);
     } else if (&labels != &labels_) {  // build(points(), labels(), ...) keeps them
@@ -324,12 +324,12 @@ class FeatureMap {
     list_len_ = candidate_list == 0
                     ? 0
                     : std::min<std::size_t>(n, static_cast<std::size_t>(std::max(candidate_list, shape_neighbours)));
-    reserve_with_headroom(axes_, n);
-    reserve_with_headroom(axis_state_, n);
-    reserve_with_headroom(lists_, n * list_len_);
-    reserve_with_headroom(list_dist_m_, n * list_len_);
-    reserve_with_headroom(list_radius_m_, list_len_ == 0 ? 0 : n);
-    reserve_with_headroom(list_state_, list_len_ == 0 ? 0 : n);
+    reserve_discarding(axes_, n);
+    reserve_discarding(axis_state_, n);
+    reserve_discarding(lists_, n * list_len_);
+    reserve_discarding(list_dist_m_, n * list_len_);
+    reserve_discarding(list_radius_m_, list_len_ == 0 ? 0 : n);
+    reserve_discarding(list_state_, list_len_ == 0 ? 0 : n);
     axes_.resize(n);
     axis_state_.assign(n, kEmpty);
     lists_.resize(n * list_len_);
@@ -599,8 +599,10 @@ class FeatureMap {
   // Lazy caches (mutable: filled by const queries, see the file comment).
   mutable std::vector<Eigen::Vector3f> axes_;
   mutable std::vector<std::uint8_t> axis_state_;
-  mutable std::vector<std::uint32_t> lists_;   // list_len_ nearest map points of each point
-  mutable std::vector<float> list_dist_m_;     // their distances from that point [m] (ascending): early exit
+  // The lists are read only once list_state_ says written: left
+  // uninitialised by resize() (most are never filled; core/buffers.hpp).
+  mutable std::vector<std::uint32_t, DefaultInitAllocator<std::uint32_t>> lists_;  // list_len_ nearest map points of each point
+  mutable std::vector<float, DefaultInitAllocator<float>> list_dist_m_;  // their distances from that point [m] (ascending): early exit
   mutable std::vector<float> list_radius_m_;   // distance to the last of them (inf: the whole map)
   mutable std::vector<std::uint8_t> list_state_;
   std::uint64_t generation_ = 0;  // unique id of the last build() (NearestCache validity); 0 = never built

@@ -38,10 +38,10 @@ class SmallKdTree3f {
   void build(const std::vector<Eigen::Vector3f>& pts) {
     // Headroom (core/buffers.hpp): a map or scan a little larger than the
     // last one does not reallocate every buffer.
-    reserve_with_headroom(points_, pts.size());
-    reserve_with_headroom(order_, pts.size());
-    reserve_with_headroom(leaf_points_, pts.size());
-    reserve_with_headroom(work_, pts.size());
+    if (&pts != &points_) reserve_discarding(points_, pts.size());
+    reserve_discarding(order_, pts.size());
+    reserve_discarding(leaf_points_, pts.size());
+    reserve_discarding(work_, pts.size());
     if (&pts != &points_) points_.assign(pts.begin(), pts.end());  // build(points()) rebuilds in place
     // The splits partition (point, index) pairs in one contiguous array: an
     // index array partitioned through a comparator that looks each point up
@@ -55,7 +55,7 @@ class SmallKdTree3f {
     // Split nodes hold > kLeaf points, so every leaf holds >= kLeaf / 2 (or all
     // n): at most 2n / (kLeaf / 2) + 1 nodes. Reserved so the vector keeps its
     // capacity from frame to frame.
-    reserve_with_headroom(nodes_, 2 * (points_.size() / (kLeaf / 2) + 1) + 1);
+    reserve_discarding(nodes_, 2 * (points_.size() / (kLeaf / 2) + 1) + 1);
     build_node(0, static_cast<std::uint32_t>(points_.size()));
     // Leaves scan their points in tree order: a contiguous copy spares the
     // indirection (and its cache misses) in the innermost loop.
