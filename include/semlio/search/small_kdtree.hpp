@@ -52,10 +52,10 @@ class SmallKdTree3f {
     order_.clear();
     leaf_points_.clear();
     if (points_.empty()) return;
-    // Split nodes hold > kLeaf points, so every leaf holds >= kLeaf / 2 (or all
-    // n): at most 2n / (kLeaf / 2) + 1 nodes. Reserved so the vector keeps its
-    // capacity from frame to frame.
-    reserve_discarding(nodes_, 2 * (points_.size() / (kLeaf / 2) + 1) + 1);
+    // Split nodes hold > kLeaf points and give each side at least a quarter,
+    // so every leaf holds >= kLeaf / 4 (or all n): at most 2n / (kLeaf / 4) + 1
+    // nodes. Reserved so the vector keeps its capacity from frame to frame.
+    reserve_discarding(nodes_, 2 * (points_.size() / (kLeaf / 4) + 1) + 1);
     build_node(0, static_cast<std::uint32_t>(points_.size()));
     // Leaves scan their points in tree order: a contiguous copy spares the
     // indirection (and its cache misses) in the innermost loop.
@@ -151,12 +151,23 @@ class SmallKdTree3f {
     }
     Eigen::Index axis = 0;
     (hi - lo).maxCoeff(&axis);
-    const std::uint32_t mid = begin + (end - begin) / 2;
     const auto a = static_cast<Eigen::Index>(axis);
-    std::nth_element(work_.begin() + begin, work_.begin() + mid, work_.begin() + end,
-                     [a](const Entry& x, const Entry& y) { return x.p[a] < y.p[a]; });
+    // Split the widest extent at its middle (one partition pass, as
+    // nanoflann does), unless that leaves less than a quarter on one side:
+    // then at the median point (std::nth_element, ~1.8x the build time when
+    // used at every node), which bounds the depth by log_{4/3}(n).
     // Left: [begin, mid) with coordinate <= split; right: [mid, end) with >= split.
-    const float split = work_[mid].p[a];
+    float split = 0.5F * (lo[a] + hi[a]);
+    const auto first = work_.begin() + begin;
+    const auto last = work_.begin() + end;
+    auto mid = static_cast<std::uint32_t>(
+        std::partition(first, last, [a, split](const Entry& e) { return e.p[a] < split; }) - work_.begin());
+    const std::uint32_t quarter = (end - begin) / 4;
+    if (mid - begin < quarter || end - mid < quarter) {
+      mid = begin + (end - begin) / 2;
+      std::nth_element(first, work_.begin() + mid, last, [a](const Entry& x, const Entry& y) { return x.p[a] < y.p[a]; });
+      split = work_[mid].p[a];
+    }
     const std::uint32_t left = build_node(begin, mid);
     const std::uint32_t right = build_node(mid, end);
     Node& n = nodes_[self];
