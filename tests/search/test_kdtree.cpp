@@ -50,6 +50,19 @@ std::vector<Vector3f> random_cloud(std::size_t n, std::mt19937& rng, float exten
   return pts;
 }
 
+// n random points and, for n > 100, a 5x5 grid (many equal distances) and
+// a duplicate of the first point: the trees' tie rules get exercised.
+std::vector<Vector3f> cloud_with_ties(std::size_t n, std::mt19937& rng) {
+  std::vector<Vector3f> pts = random_cloud(n, rng, 4.0F);
+  if (n > 100) {
+    for (int x = 0; x < 5; ++x) {
+      for (int y = 0; y < 5; ++y) pts.emplace_back(0.25F * static_cast<float>(x), 0.25F * static_cast<float>(y), 1.0F);
+    }
+    pts.push_back(pts.front());
+  }
+  return pts;
+}
+
 void check_queries(const semlio::KdTree3f& tree, const std::vector<Vector3f>& pts,
                    const Vector3f& q) {
   const auto ref = brute(pts, q);
@@ -142,13 +155,7 @@ TEST_CASE("SmallKdTree3f knn equals KdTree3f knn, also after rebuilds", "[search
   std::size_t compared = 0;
   for (const std::size_t n : {std::size_t{3000}, std::size_t{1}, std::size_t{9}, std::size_t{700}, std::size_t{0},
                               std::size_t{4000}}) {
-    std::vector<Vector3f> pts = random_cloud(n, rng, 4.0F);
-    if (n > 100) {
-      for (int x = 0; x < 5; ++x) {
-        for (int y = 0; y < 5; ++y) pts.emplace_back(0.25F * static_cast<float>(x), 0.25F * static_cast<float>(y), 1.0F);
-      }
-      pts.push_back(pts.front());  // a duplicate point
-    }
+    const std::vector<Vector3f> pts = cloud_with_ties(n, rng);
     const semlio::KdTree3f big(pts);
     small.build(pts);
     REQUIRE(small.size() == pts.size());
@@ -230,13 +237,7 @@ TEST_CASE("SmallKdTree3f bounded knn equals KdTree3f bounded knn, also after reb
   std::size_t compared = 0;
   for (const std::size_t n : {std::size_t{3000}, std::size_t{1}, std::size_t{9}, std::size_t{700}, std::size_t{0},
                               std::size_t{4000}}) {
-    std::vector<Vector3f> pts = random_cloud(n, rng, 4.0F);
-    if (n > 100) {
-      for (int x = 0; x < 5; ++x) {
-        for (int y = 0; y < 5; ++y) pts.emplace_back(0.25F * static_cast<float>(x), 0.25F * static_cast<float>(y), 1.0F);
-      }
-      pts.push_back(pts.front());  // a duplicate point
-    }
+    const std::vector<Vector3f> pts = cloud_with_ties(n, rng);
     const semlio::KdTree3f big(pts);
     small.build(pts);
     std::uniform_real_distribution<float> u(-5.0F, 5.0F);
