@@ -50,6 +50,15 @@ std::vector<Vector3f> random_cloud(std::size_t n, std::mt19937& rng, float exten
   return pts;
 }
 
+// Query t of a tree comparison: a cloud point, the tie grid's centre, or a
+// random point, in turn.
+Vector3f tree_comparison_query(int t, const std::vector<Vector3f>& pts, std::uniform_real_distribution<float>& u,
+                               std::mt19937& rng) {
+  if (t % 4 == 0 && !pts.empty()) return pts[static_cast<std::size_t>(t) % pts.size()];
+  if (t % 4 == 1) return Vector3f(0.5F, 0.5F, 1.0F);
+  return Vector3f(u(rng), u(rng), u(rng));
+}
+
 // n random points and, for n > 100, a 5x5 grid (many equal distances) and
 // a duplicate of the first point: the trees' tie rules get exercised.
 std::vector<Vector3f> cloud_with_ties(std::size_t n, std::mt19937& rng) {
@@ -161,9 +170,7 @@ TEST_CASE("SmallKdTree3f knn equals KdTree3f knn, also after rebuilds", "[search
     REQUIRE(small.size() == pts.size());
     std::uniform_real_distribution<float> u(-5.0F, 5.0F);
     for (int t = 0; t < 200; ++t) {
-      const Vector3f q = t % 4 == 0 && !pts.empty() ? pts[static_cast<std::size_t>(t) % pts.size()]
-                         : t % 4 == 1              ? Vector3f(0.5F, 0.5F, 1.0F)
-                                                   : Vector3f(u(rng), u(rng), u(rng));
+      const Vector3f q = tree_comparison_query(t, pts, u, rng);
       for (const std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{15}, std::size_t{40}}) {
         std::vector<std::uint32_t> ia(k);
         std::vector<float> da(k);
@@ -242,9 +249,7 @@ TEST_CASE("SmallKdTree3f bounded knn equals KdTree3f bounded knn, also after reb
     small.build(pts);
     std::uniform_real_distribution<float> u(-5.0F, 5.0F);
     for (int t = 0; t < 100; ++t) {
-      const Vector3f q = t % 4 == 0 && !pts.empty() ? pts[static_cast<std::size_t>(t) % pts.size()]
-                         : t % 4 == 1              ? Vector3f(0.5F, 0.5F, 1.0F)
-                                                   : Vector3f(u(rng), u(rng), u(rng));
+      const Vector3f q = tree_comparison_query(t, pts, u, rng);
       if (pts.empty()) {
         std::uint32_t i0 = 0;
         float d0 = 0.0F;

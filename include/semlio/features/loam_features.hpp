@@ -63,6 +63,7 @@
 #include <string>
 #include <vector>
 
+#include <semlio/core/buffers.hpp>
 #include <semlio/core/error.hpp>
 #include <semlio/core/fast_math.hpp>
 #include <semlio/core/labels.hpp>
@@ -281,17 +282,15 @@ class LoamFeatureExtractor {
   /// Sizes the per-ring buffers for the longest ring a scan of n points can
   /// have, n (26 bytes per point): grown ring by ring to the exact length,
   /// they reallocated whenever a later scan had a longer ring, long after
-  /// warm-up (3-9 blocks on such frames of a drive).
+  /// warm-up (3-9 blocks on such frames of a drive). Each is refilled per
+  /// ring, so its content may be dropped.
   void reserve_ring_buffers(std::size_t n) {
-    const auto reserve = [n](auto& v) {
-      if (v.capacity() < n) v.reserve(n);
-    };
-    reserve(ring_pts_);
-    reserve(ring_az_);
-    reserve(range_);
-    reserve(ring_c_);
-    reserve(ring_rej_);
-    reserve(picked_);
+    reserve_discarding(ring_pts_, n);
+    reserve_discarding(ring_az_, n);
+    reserve_discarding(range_, n);
+    reserve_discarding(ring_c_, n);
+    reserve_discarding(ring_rej_, n);
+    reserve_discarding(picked_, n);
   }
 
   /// Eq. 2, rejection and selection on the ring order_[b, e). The ring's

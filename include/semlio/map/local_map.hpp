@@ -450,18 +450,15 @@ class LocalMap {
   }
 
   // Copies the kept points (and labels) into c, reusing its buffers: a
-  // recycled cloud (trim()) that is too small regrows with a quarter of
-  // headroom, so that once the store is full the keyframes' varying sizes
-  // soon stop reallocating; a new one takes its exact size.
+  // recycled cloud (trim()) that is too small regrows with headroom
+  // (core/buffers.hpp), so that once the store is full the keyframes'
+  // varying sizes soon stop reallocating; a new one takes its exact size.
   void keep(const std::vector<Eigen::Vector3f>& points, const std::vector<Class>& labels, Cloud& c) const {
     const bool labelled = !labels.empty();
-    const auto reserve = [n = points.size()](auto& v) {
-      if (v.capacity() < n) v.reserve(v.capacity() == 0 ? n : n + n / 4);
-    };
+    reserve_discarding(c.points, points.size());
+    reserve_discarding(c.labels, labelled ? labels.size() : 0);
     c.points.clear();
     c.labels.clear();
-    reserve(c.points);
-    if (labelled) reserve(c.labels);
     for (std::size_t i = 0; i < points.size(); ++i) {
       if (config_.exclude_dynamic && labelled && is_dynamic(labels[i])) continue;
       c.points.push_back(points[i]);
