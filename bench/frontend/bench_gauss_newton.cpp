@@ -139,8 +139,9 @@ void BM_SmallKdTreeBuild(benchmark::State& state) {
 // The k-NN queries FeatureMap sends its tree, on the surface map, by each
 // tree: kRefill = a NearestCache refill (20 nearest within (1 m + 0.1 m)^2,
 // at the scan's surface features moved by the starting guess), kList = a
-// candidate list (32 nearest, unbounded, at every map point).
-enum class MapQuery { kRefill, kList };
+// candidate list (32 nearest, unbounded, at every map point), kAxis = a
+// shape axis's neighbourhood (10 nearest, unbounded, at every map point).
+enum class MapQuery { kRefill, kList, kAxis };
 
 template <typename Tree>
 void BM_MapKnn(benchmark::State& state, MapQuery query) {
@@ -159,7 +160,7 @@ void BM_MapKnn(benchmark::State& state, MapQuery query) {
   } else {
     queries = points;
   }
-  const std::size_t k = query == MapQuery::kRefill ? 20 : 32;
+  const std::size_t k = query == MapQuery::kRefill ? 20 : query == MapQuery::kList ? 32 : 10;
   const float bound2 = semlio::detail::float_gate(1.1 * 1.1);
   std::vector<std::uint32_t> idx(k);
   std::vector<float> d2(k);
@@ -215,6 +216,10 @@ int main(int argc, char** argv) {
   benchmark::RegisterBenchmark("MapKnn/list/KdTree3f", BM_MapKnn<semlio::KdTree3f>, MapQuery::kList)
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("MapKnn/list/SmallKdTree3f", BM_MapKnn<semlio::SmallKdTree3f>, MapQuery::kList)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("MapKnn/axis/KdTree3f", BM_MapKnn<semlio::KdTree3f>, MapQuery::kAxis)
+      ->Unit(benchmark::kMillisecond);
+  benchmark::RegisterBenchmark("MapKnn/axis/SmallKdTree3f", BM_MapKnn<semlio::SmallKdTree3f>, MapQuery::kAxis)
       ->Unit(benchmark::kMillisecond);
   benchmark::RegisterBenchmark("FeatureMapBuild/kitti_surface_map/no_lists", BM_FeatureMapBuild, 0)
       ->Unit(benchmark::kMillisecond);

@@ -160,8 +160,8 @@ class NormalConsistency {
     const auto keep = static_cast<std::size_t>(config_.keep);
     const auto k = static_cast<std::size_t>(config_.candidates);
 
-    std::array<std::uint32_t, kMaxCandidates> idx{};
-    std::array<float, kMaxCandidates> d2{};
+    std::array<std::uint32_t, kMaxCandidates> idx;  // uninitialised (see kMaxCandidateList)
+    std::array<float, kMaxCandidates> d2;
     // Line 3: the candidates inside the gate, in (distance, index) order.
     const std::size_t n = cache != nullptr ? map_->nearest(q, k, gate2, idx.data(), d2.data(), *cache, i)
                                            : map_->nearest(q, k, gate2, idx.data(), d2.data());

@@ -98,6 +98,10 @@ constexpr int min_points(FeatureKind kind) noexcept { return kind == FeatureKind
 inline constexpr int kMaxShapeNeighbours = 32;
 
 /// Longest per-point candidate list (FeatureMap::build).
+/// The queries' stack buffers of this (or kMaxShapeNeighbours) length are
+/// left uninitialised (`std::array<T, N> a;`, not `a{}`): only the entries a
+/// search wrote are read, and zeroing 256-512 bytes per query was 14 % of
+/// FeatureMap::nearest's samples on the street-corners kernel (perf).
 inline constexpr int kMaxCandidateList = 64;
 
 /// How far beyond the distance gate a NearestCache refill searches [m]: a
@@ -135,8 +139,8 @@ Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const std
 /// tree points (q itself included when it is a tree point). Allocation-free.
 template <typename Tree>
 Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const Eigen::Vector3f& q, int k) {
-  std::array<std::uint32_t, kMaxShapeNeighbours> idx{};
-  std::array<float, kMaxShapeNeighbours> d2{};
+  std::array<std::uint32_t, kMaxShapeNeighbours> idx;  // uninitialised (see kMaxCandidateList)
+  std::array<float, kMaxShapeNeighbours> d2;
   const std::size_t n = tree.knn(q, static_cast<std::size_t>(k), idx.data(), d2.data());
   return neighbourhood_axis(tree, kind, idx.data(), n);
 }
@@ -351,8 +355,8 @@ class FeatureMap {
       std::uint32_t anchor = 0;
       float anchor_d2 = 0.0F;
       anchor_of(q, anchor, anchor_d2);
-      std::array<std::uint32_t, kMaxCandidateList> own{};
-      std::array<float, kMaxCandidateList> own_dist{};
+      std::array<std::uint32_t, kMaxCandidateList> own;
+      std::array<float, kMaxCandidateList> own_dist;
       float radius_f = 0.0F;
       const float* dist_m = nullptr;
       const std::uint32_t* list = candidates_of(anchor, own.data(), own_dist.data(), radius_f, dist_m);
@@ -435,7 +439,7 @@ class FeatureMap {
     // list then holds every map point within `radius` of q: the L-th
     // distance when L were found, else the search bound itself.
     ++cache.refills_;
-    std::array<float, kMaxCandidateList> d2{};
+    std::array<float, kMaxCandidateList> d2;
     const double slack_m = kNearestCacheSlackM;
     const double bound = std::isfinite(max_sq_dist_m2) ? std::sqrt(max_sq_dist_m2) + slack_m : max_sq_dist_m2;
     const float bound2 = detail::float_gate(bound * bound);
@@ -459,8 +463,8 @@ class FeatureMap {
   [[nodiscard]] Eigen::Vector3f axis(std::size_t i) const {
     std::atomic_ref<std::uint8_t> state(axis_state_[i]);
     if (state.load(std::memory_order_acquire) == kReady) return axes_[i];
-    std::array<std::uint32_t, kMaxShapeNeighbours> idx{};
-    std::array<float, kMaxShapeNeighbours> d2{};
+    std::array<std::uint32_t, kMaxShapeNeighbours> idx;
+    std::array<float, kMaxShapeNeighbours> d2;
     const std::size_t found =
         tree_.knn(tree_.point(i), static_cast<std::size_t>(shape_neighbours_), idx.data(), d2.data());
     const Eigen::Vector3f a = detail::neighbourhood_axis(tree_, kind_, idx.data(), found);
@@ -571,7 +575,7 @@ class FeatureMap {
       dist_m = list_dist_m_.data() + offset;
       return lists_.data() + offset;
     }
-    std::array<float, kMaxCandidateList> d2{};
+    std::array<float, kMaxCandidateList> d2;
     const std::size_t found = tree_.knn(tree_.point(m), list_len_, own, d2.data());
     for (std::size_t j = 0; j < found; ++j) own_dist[j] = std::sqrt(d2[j]);
     dist_m = own_dist;

@@ -70,8 +70,9 @@ class Bvh {
     bool found = false;
     // Stack entries carry the entry distance of their box, so a node popped
     // after a closer hit was found is skipped without a second slab test.
-    std::array<std::uint32_t, 64> stack{};
-    std::array<float, 64> stack_t{};
+    // Uninitialised: only pushed entries are read (no 512-byte zeroing per ray).
+    std::array<std::uint32_t, 64> stack;
+    std::array<float, 64> stack_t;
     std::size_t top = 0;
     float t_root = 0.0F;
     if (!slab(nodes_[0], ox, oy, oz, ix, iy, iz, static_cast<float>(best), t_root)) return false;
