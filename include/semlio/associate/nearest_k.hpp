@@ -57,12 +57,10 @@ class NearestK {
   /// One FeatureMatches per bound feature at pose T_map_scan into out
   /// (resized; no allocation once its capacity suffices).
   void associate(const SE3d& T_map_scan, Correspondences& out) const {
-    const std::size_t n = features_ == nullptr ? 0 : features_->size();
-    detail::reset_matches(n, out);
-    if (map_ == nullptr || map_->empty()) return;
-    const Eigen::Matrix3d R = T_map_scan.rotation();
-    const Eigen::Vector3d& t = T_map_scan.translation();
-    for (std::size_t i = 0; i < n; ++i) out[i] = match(detail::feature_to_map(R, t, (*features_)[i]));
+    detail::associate_each(features_, map_, T_map_scan, out,
+                           [this](std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+                             return match(detail::feature_to_map(R, t, (*features_)[i]));
+                           });
   }
 
   /// As associate(T_map_scan, out) -- the same matches -- reusing each
@@ -71,22 +69,19 @@ class NearestK {
   /// is (re)sized as needed; stale slots are refilled, never trusted.
   void associate(const SE3d& T_map_scan, Correspondences& out, NearestCache& cache) const {
     const std::size_t n = features_ == nullptr ? 0 : features_->size();
-    detail::reset_matches(n, out);
-    if (map_ == nullptr || map_->empty()) return;
     const std::size_t len = cache_list_len();
     if (cache.slots() < n || cache.list_len() != len) cache.reset(std::max(n, cache.slots()), len);
-    const Eigen::Matrix3d R = T_map_scan.rotation();
-    const Eigen::Vector3d& t = T_map_scan.translation();
     const auto k = static_cast<std::size_t>(config_.k);
     // nearest() returns the k-NN cut at the gate, as match() computes it.
     const double gate2 = config_.max_distance_m * config_.max_distance_m;
-    std::array<std::uint32_t, kMaxKeptMatches> idx{};
-    std::array<float, kMaxKeptMatches> d2{};
-    for (std::size_t i = 0; i < n; ++i) {
-      const Eigen::Vector3f q = detail::feature_to_map(R, t, (*features_)[i]);
-      const std::size_t found = map_->nearest(q, k, gate2, idx.data(), d2.data(), cache, i);
-      out[i] = finish(idx.data(), d2.data(), found);
-    }
+    detail::associate_each(features_, map_, T_map_scan, out,
+                           [&](std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+                             std::array<std::uint32_t, kMaxKeptMatches> idx{};
+                             std::array<float, kMaxKeptMatches> d2{};
+                             const Eigen::Vector3f q = detail::feature_to_map(R, t, (*features_)[i]);
+                             const std::size_t found = map_->nearest(q, k, gate2, idx.data(), d2.data(), cache, i);
+                             return finish(idx.data(), d2.data(), found);
+                           });
   }
 
   /// Length of the per-feature lists associate(..., cache) keeps: k plus a

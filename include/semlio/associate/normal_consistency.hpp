@@ -177,12 +177,10 @@ class NormalConsistency {
   }
 
   void associate_impl(const SE3d& T_map_scan, Correspondences& out, NearestCache* cache) const {
-    const std::size_t n = features_ == nullptr ? 0 : features_->size();
-    detail::reset_matches(n, out);
-    if (map_ == nullptr || map_->empty()) return;
-    const Eigen::Matrix3d R = T_map_scan.rotation();
-    const Eigen::Vector3d& t = T_map_scan.translation();
-    for (std::size_t i = 0; i < n; ++i) out[i] = match_impl(i, R, t, cache);
+    detail::associate_each(features_, map_, T_map_scan, out,
+                           [this, cache](std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
+                             return match_impl(i, R, t, cache);
+                           });
   }
 
   Config config_;

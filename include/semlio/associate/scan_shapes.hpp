@@ -12,6 +12,7 @@
 
 #include <semlio/concepts.hpp>
 #include <semlio/core/error.hpp>
+#include <semlio/lie/se3.hpp>
 #include <semlio/map/feature_map.hpp>
 #include <semlio/search/kdtree.hpp>
 
@@ -32,6 +33,20 @@ inline bool within_gate(float sq_dist, double max_sq_dist) {
 /// Resizes out to n features, every entry empty; reuses capacity.
 inline void reset_matches(std::size_t n, Correspondences& out) {
   out.assign(n, FeatureMatches{});
+}
+
+/// The loop of every associator's associate(): out gets one FeatureMatches
+/// per bound feature (all empty without a non-empty map), each from
+/// match(i, R, t) at the pose's rotation and translation.
+template <typename Match>
+void associate_each(const std::vector<Eigen::Vector3f>* features, const FeatureMap* map, const SE3d& T_map_scan,
+                    Correspondences& out, Match&& match) {
+  const std::size_t n = features == nullptr ? 0 : features->size();
+  reset_matches(n, out);
+  if (map == nullptr || map->empty()) return;
+  const Eigen::Matrix3d R = T_map_scan.rotation();
+  const Eigen::Vector3d& t = T_map_scan.translation();
+  for (std::size_t i = 0; i < n; ++i) out[i] = match(i, R, t);
 }
 
 /// Appends candidate index i with 1-based rank to m.

@@ -177,12 +177,6 @@ inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEnt
   }
 }
 
-/// radix_sort_by_key with histograms of its own (one-off sorts).
-inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEntry>& scratch) {
-  RadixCounts counts;
-  radix_sort_by_key(entries, scratch, counts);
-}
-
 /// Appends the key-sorted `fresh` to the key-sorted `entries` and merges
 /// them, held entries first on equal keys (as std::inplace_merge with the
 /// held ones as the first range), but backwards in place: std::inplace_merge
@@ -524,7 +518,8 @@ class LocalMap {
       // Growing a map-sized vector copies it into fresh pages; while the map
       // grows that happened on 176 of 428 builds of the main job's drive and
       // cost ~5 ms each (page faults, the copy). An eighth of headroom leaves
-      // 40 and still no doubled capacity at rest.
+      // 40 and still no doubled capacity at rest (so not reserve_with_headroom's
+      // 1.5x step: this buffer is map-sized).
       const std::size_t needed = m.entries.size() + m.fresh.size();
       if (m.entries.capacity() < needed) m.entries.reserve(needed + needed / 8);
       detail::merge_sorted_entries(m.entries, m.fresh);
