@@ -72,6 +72,23 @@ std::vector<Vector3f> cloud_with_ties(std::size_t n, std::mt19937& rng) {
   return pts;
 }
 
+// Clouds of several sizes (cloud_with_ties), each rebuilt into one
+// SmallKdTree3f and put in a KdTree3f, and `queries` queries on each
+// (tree_comparison_query): compare(small, big, pts, q) for every pair.
+template <typename Compare>
+void for_each_tree_comparison(std::mt19937& rng, int queries, Compare compare) {
+  semlio::SmallKdTree3f small;
+  for (const std::size_t n : {std::size_t{3000}, std::size_t{1}, std::size_t{9}, std::size_t{700}, std::size_t{0},
+                              std::size_t{4000}}) {
+    const std::vector<Vector3f> pts = cloud_with_ties(n, rng);
+    const semlio::KdTree3f big(pts);
+    small.build(pts);
+    REQUIRE(small.size() == pts.size());
+    std::uniform_real_distribution<float> u(-5.0F, 5.0F);
+    for (int t = 0; t < queries; ++t) compare(small, big, pts, tree_comparison_query(t, pts, u, rng));
+  }
+}
+
 void check_queries(const semlio::KdTree3f& tree, const std::vector<Vector3f>& pts,
                    const Vector3f& q) {
   const auto ref = brute(pts, q);
@@ -160,33 +177,24 @@ TEST_CASE("SmallKdTree3f knn equals KdTree3f knn, also after rebuilds", "[search
   // with many equal distances and duplicated points: identical indices and
   // distances, in the same (distance, index) order.
   std::mt19937 rng(21);
-  semlio::SmallKdTree3f small;
   std::size_t compared = 0;
-  for (const std::size_t n : {std::size_t{3000}, std::size_t{1}, std::size_t{9}, std::size_t{700}, std::size_t{0},
-                              std::size_t{4000}}) {
-    const std::vector<Vector3f> pts = cloud_with_ties(n, rng);
-    const semlio::KdTree3f big(pts);
-    small.build(pts);
-    REQUIRE(small.size() == pts.size());
-    std::uniform_real_distribution<float> u(-5.0F, 5.0F);
-    for (int t = 0; t < 200; ++t) {
-      const Vector3f q = tree_comparison_query(t, pts, u, rng);
-      for (const std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{15}, std::size_t{40}}) {
-        std::vector<std::uint32_t> ia(k);
-        std::vector<float> da(k);
-        std::vector<std::uint32_t> ib(k);
-        std::vector<float> db(k);
-        const std::size_t na = small.knn(q, k, ia.data(), da.data());
-        const std::size_t nb = big.knn(q, k, ib.data(), db.data());
-        REQUIRE(na == nb);
-        for (std::size_t i = 0; i < na; ++i) {
-          REQUIRE(ia[i] == ib[i]);
-          REQUIRE(da[i] == db[i]);
-        }
-        ++compared;
+  for_each_tree_comparison(rng, 200, [&](const semlio::SmallKdTree3f& small, const semlio::KdTree3f& big,
+                                         const std::vector<Vector3f>&, const Vector3f& q) {
+    for (const std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{15}, std::size_t{40}}) {
+      std::vector<std::uint32_t> ia(k);
+      std::vector<float> da(k);
+      std::vector<std::uint32_t> ib(k);
+      std::vector<float> db(k);
+      const std::size_t na = small.knn(q, k, ia.data(), da.data());
+      const std::size_t nb = big.knn(q, k, ib.data(), db.data());
+      REQUIRE(na == nb);
+      for (std::size_t i = 0; i < na; ++i) {
+        REQUIRE(ia[i] == ib[i]);
+        REQUIRE(da[i] == db[i]);
       }
+      ++compared;
     }
-  }
+  });
   CHECK(compared == 6U * 200U * 4U);
 }
 
@@ -240,25 +248,17 @@ TEST_CASE("SmallKdTree3f bounded knn equals KdTree3f bounded knn, also after reb
   // the same tree, a grid of equal distances and a duplicate; then real KITTI
   // points (a map-sized subset of scan 000000, queried with scan 000001).
   std::mt19937 rng(22);
-  semlio::SmallKdTree3f small;
   std::size_t compared = 0;
-  for (const std::size_t n : {std::size_t{3000}, std::size_t{1}, std::size_t{9}, std::size_t{700}, std::size_t{0},
-                              std::size_t{4000}}) {
-    const std::vector<Vector3f> pts = cloud_with_ties(n, rng);
-    const semlio::KdTree3f big(pts);
-    small.build(pts);
-    std::uniform_real_distribution<float> u(-5.0F, 5.0F);
-    for (int t = 0; t < 100; ++t) {
-      const Vector3f q = tree_comparison_query(t, pts, u, rng);
-      if (pts.empty()) {
-        std::uint32_t i0 = 0;
-        float d0 = 0.0F;
-        CHECK(small.knn(q, 1, &i0, &d0, 1.0F) == 0);
-        continue;
-      }
-      compared += require_bounded_equal(small, big, q);
+  for_each_tree_comparison(rng, 100, [&](const semlio::SmallKdTree3f& small, const semlio::KdTree3f& big,
+                                         const std::vector<Vector3f>& pts, const Vector3f& q) {
+    if (pts.empty()) {
+      std::uint32_t i0 = 0;
+      float d0 = 0.0F;
+      CHECK(small.knn(q, 1, &i0, &d0, 1.0F) == 0);
+      return;
     }
-  }
+    compared += require_bounded_equal(small, big, q);
+  });
   CHECK(compared > 4000U);
 
   const semlio::Scan s0 = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
@@ -266,6 +266,7 @@ TEST_CASE("SmallKdTree3f bounded knn equals KdTree3f bounded knn, also after reb
   std::vector<Vector3f> map;
   for (std::size_t i = 0; i < s0.points.size(); i += 4) map.push_back(s0.points[i]);
   const semlio::KdTree3f big(map);
+  semlio::SmallKdTree3f small;
   small.build(map);
   std::size_t real = 0;
   for (std::size_t i = 0; i < s1.points.size(); i += 97) real += require_bounded_equal(small, big, s1.points[i]);
