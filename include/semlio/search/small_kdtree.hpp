@@ -41,6 +41,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -144,7 +145,8 @@ class SmallKdTree3f {
 
  private:
   static constexpr std::uint32_t kLeaf = 16;  // most points per leaf (file comment)
-  static_assert(kLeaf % 4 == 0 && kLeaf <= 32, "leaf lanes come in SSE2 groups of 4 and fit a 32-bit mask");
+  static_assert(kLeaf % 4 == 0 && kLeaf >= 8 && kLeaf <= 32,
+                "leaf lanes come in SSE2 groups of 4 and fit a 32-bit mask; kMaxDepth assumes >= 8");
   static constexpr std::size_t kBlock = 3 * kLeaf;  // floats per leaf block (x, y, z lanes)
   static constexpr std::size_t kMaxDepth = 72;      // most far sides pending at once: see search()
 
@@ -236,8 +238,9 @@ class SmallKdTree3f {
       std::array<float, 3> off;
     };
     // A split leaves each side all but a quarter (rounded down) of its
-    // parent at most (build_node), so a path from the root to a leaf of <= 8
-    // points crosses at most 71 splits for any 32-bit-indexed tree.
+    // parent at most (build_node), so a path from the root to a leaf (which
+    // holds up to kLeaf >= 8 points) crosses at most 71 splits in any
+    // 32-bit-indexed tree.
     std::array<Pending, kMaxDepth> stack;  // uninitialised: only pushed entries are read
     std::size_t top = 0;
     std::uint32_t node = 0;
@@ -308,7 +311,7 @@ class SmallKdTree3f {
     }
     mask &= count >= 32 ? ~0U : (1U << count) - 1U;
     while (mask != 0) {
-      const auto j = static_cast<std::uint32_t>(__builtin_ctz(mask));
+      const auto j = static_cast<std::uint32_t>(std::countr_zero(mask));
       mask &= mask - 1U;
       r.add(d[j], order_[n.begin + j]);
     }
