@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <array>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -150,6 +151,47 @@ void BM_EigenSymmetric3_EigenIterative(benchmark::State& state) {
   set_points(state, mats.size());
 }
 BENCHMARK(BM_EigenSymmetric3_EigenIterative);
+
+// Covariances of real 10-point neighbourhoods (every 50th point of the KITTI
+// scan), what the associators' axis fits decompose.
+const std::vector<Eigen::Matrix3d>& kitti_neighbourhood_covariances() {
+  static const std::vector<Eigen::Matrix3d> covs = [] {
+    const semlio::Scan& scan = kitti_raw_scan();
+    semlio::KdTree3f tree;
+    tree.build(scan.points);
+    std::vector<Eigen::Matrix3d> out;
+    std::array<std::uint32_t, 10> idx{};
+    std::array<float, 10> d2{};
+    for (std::size_t i = 0; i < scan.size(); i += 50) {
+      const std::size_t n = tree.knn(scan.points[i], idx.size(), idx.data(), d2.data());
+      auto at = [&](std::size_t j) -> const Eigen::Vector3f& { return scan.points[idx[j]]; };
+      Eigen::Vector3d mean;
+      Eigen::Matrix3d cov;
+      semlio::detail::mean_covariance(n, at, mean, cov);
+      out.push_back(cov);
+    }
+    return out;
+  }();
+  return covs;
+}
+
+// Arg 0: the full decomposition (eigen_symmetric3); 1 / 2: only the smallest
+// / largest eigenvalue's vector (eigenvector_symmetric3, the axis fits' path).
+void BM_EigenAxis_KittiNeighbourhoods(benchmark::State& state) {
+  const std::vector<Eigen::Matrix3d>& covs = kitti_neighbourhood_covariances();
+  for (auto _ : state) {
+    for (const auto& c : covs) {
+      if (state.range(0) == 0) {
+        benchmark::DoNotOptimize(semlio::eigen_symmetric3(c).vectors);
+      } else {
+        benchmark::DoNotOptimize(semlio::eigenvector_symmetric3(
+            c, state.range(0) == 1 ? semlio::EigenEnd::kSmallest : semlio::EigenEnd::kLargest));
+      }
+    }
+  }
+  set_points(state, covs.size());
+}
+BENCHMARK(BM_EigenAxis_KittiNeighbourhoods)->Arg(0)->Arg(1)->Arg(2);
 
 }  // namespace
 

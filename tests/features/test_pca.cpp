@@ -2,11 +2,18 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <semlio/features/pca.hpp>
+#include <semlio/io/kitti.hpp>
+#include <semlio/search/small_kdtree.hpp>
+#include <semlio_test/data.hpp>
 
 namespace test_pca {  // one namespace per test file: the area compiles as one TU
 
@@ -159,6 +166,103 @@ TEST_CASE("fit_local_shape: plane, line, mean and covariance by hand", "[feature
     CHECK_FALSE(s0.valid);
     CHECK(s0.normal.allFinite());
   }
+}
+
+namespace {
+
+/// Bitwise equality of two vectors (== would call -0.0 and 0.0 equal and NaN unequal).
+bool same_bits(const Vector3d& a, const Vector3d& b) { return std::memcmp(a.data(), b.data(), sizeof(double) * 3) == 0; }
+
+/// eigenvector_symmetric3(C, end) against the column of eigen_symmetric3(C),
+/// bit for bit; counts how often the separated eigenvalue was the one asked for.
+void check_end_vectors(const Matrix3d& C, int& separated) {
+  const semlio::Eigen3 full = semlio::eigen_symmetric3(C);
+  const Vector3d lo = semlio::eigenvector_symmetric3(C, semlio::EigenEnd::kSmallest);
+  const Vector3d hi = semlio::eigenvector_symmetric3(C, semlio::EigenEnd::kLargest);
+  INFO("C =\n" << C << "\nfull\n" << full.vectors << "\nsmallest " << lo.transpose() << "\nlargest " << hi.transpose());
+  CHECK(same_bits(lo, full.vectors.col(0)));
+  CHECK(same_bits(hi, full.vectors.col(2)));
+  const semlio::detail::SymmetricSplit s = semlio::detail::split_symmetric3(C);
+  if (s.kind == semlio::detail::SymmetricSplit::Kind::kGeneral && s.p > semlio::detail::kSeparatedMinSpread) {
+    ++separated;
+  }
+}
+
+}  // namespace
+
+TEST_CASE("eigenvector_symmetric3 equals eigen_symmetric3's end columns bit for bit", "[features]") {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int separated = 0;
+  SECTION("random matrices over twelve decades") {
+    for (int trial = 0; trial < 2000; ++trial) {
+      Matrix3d M;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) M(r, c) = u(rng);
+      }
+      check_end_vectors(std::pow(10.0, 6.0 * u(rng)) * (M + M.transpose()), separated);
+    }
+    CHECK(separated == 2000);
+  }
+  SECTION("planes, lines, repeated and nearly isotropic spectra") {
+    // Near-isotropic spectra (spread below kSeparatedMinSpread after
+    // scaling) take the sorted path; their eigenvalues may tie after rounding.
+    const std::vector<Vector3d> spectra = {
+        {1e-6, 1.0, 2.0},  {1e-6, 1e-6, 2.0},  {0.0, 0.0, 1.0},          {0.0, 1.0, 1.0},
+        {1.0, 1.0, 2.0},   {1.0, 2.0, 2.0},    {5.0, 5.0, 5.0},          {1.0, 1.0, 1.0 + 1e-14},
+        {1.0, 1.0 + 1e-14, 1.0 + 2e-14},       {1.0, 1.0 + 1e-13, 1.0 + 1e-12}, {1.0, 1.0 + 1e-9, 2.0}};
+    for (const Vector3d& lam : spectra) {
+      for (int k = 0; k < 50; ++k) {
+        const Matrix3d R = random_rotation(rng);
+        const Matrix3d C = R * lam.asDiagonal() * R.transpose();
+        check_end_vectors(0.5 * (C + C.transpose()), separated);
+      }
+    }
+    CHECK(separated < 11 * 50);  // the near-isotropic ones did take the sorted path
+  }
+  SECTION("zero, scalar and non-finite matrices") {
+    check_end_vectors(Matrix3d::Zero(), separated);
+    check_end_vectors(2.5 * Matrix3d::Identity(), separated);
+    Matrix3d bad = Matrix3d::Identity();
+    bad(1, 2) = std::nan("");
+    check_end_vectors(bad, separated);
+    CHECK(separated == 0);
+  }
+}
+
+TEST_CASE("fit_local_axis equals fit_local_shape's normal and direction on real KITTI neighbourhoods",
+          "[features]") {
+  const semlio::Scan scan = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  REQUIRE(scan.size() > 100000);
+  semlio::SmallKdTree3f tree;
+  tree.build(scan.points);
+  std::array<std::uint32_t, 10> idx{};
+  std::array<float, 10> d2{};
+  std::size_t queries = 0;
+  std::size_t separated = 0;
+  std::size_t mismatches = 0;
+  for (std::size_t i = 0; i < scan.size(); i += 13) {
+    const std::size_t n = tree.knn(scan.points[i], idx.size(), idx.data(), d2.data());
+    const auto point_at = [&](std::size_t j) -> const Eigen::Vector3f& { return scan.points[idx[j]]; };
+    const semlio::LocalShape shape = semlio::fit_local_shape(n, point_at);
+    for (const semlio::EigenEnd end : {semlio::EigenEnd::kSmallest, semlio::EigenEnd::kLargest}) {
+      Vector3d axis = Vector3d::Constant(7.0);
+      const bool valid = semlio::fit_local_axis(n, point_at, end, axis);
+      REQUIRE(valid == shape.valid);
+      mismatches += same_bits(axis, end == semlio::EigenEnd::kSmallest ? shape.normal : shape.direction) ? 0U : 1U;
+      ++queries;
+    }
+    Eigen::Matrix3d cov;
+    Vector3d mean;
+    auto at = point_at;
+    semlio::detail::mean_covariance(n, at, mean, cov);
+    const semlio::detail::SymmetricSplit s = semlio::detail::split_symmetric3(cov);
+    // Each neighbourhood's separated eigenvalue is one end: the short path serves one of its two queries.
+    separated += s.kind == semlio::detail::SymmetricSplit::Kind::kGeneral && s.p > semlio::detail::kSeparatedMinSpread ? 1U : 0U;
+  }
+  CHECK(mismatches == 0);
+  CHECK(queries > 15000);
+  CHECK(separated * 2 == queries);  // every real neighbourhood is general and well spread
 }
 
 }  // namespace test_pca

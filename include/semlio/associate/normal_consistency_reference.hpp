@@ -7,7 +7,9 @@
 /// tests and benchmarks; not for production use. It searches its own
 /// nanoflann trees (KdTree3f) on both sides, where NormalConsistency and
 /// FeatureMap use SmallKdTree3f, so that equality also checks the two trees
-/// against each other.
+/// against each other, and it fits each axis with the full eq. 3-6 fit
+/// (fit_local_shape) where NormalConsistency fits only the axis it reads
+/// (fit_local_axis), so that equality checks that shortcut too.
 
 #include <Eigen/Core>
 
@@ -89,10 +91,12 @@ class NormalConsistencyReference {
       if (!detail::within_gate(d2[j], gate2)) break;
       // Line 5: the candidate's 10-NN in the map and its normal (eq. 3-6).
       const Eigen::Vector3f n_map =
-          detail::neighbourhood_axis(map_tree, kind, map_tree.point(idx[j]), map_->shape_neighbours());
+          detail::neighbourhood_axis(map_tree, kind, map_tree.point(idx[j]), map_->shape_neighbours(),
+                                     detail::AxisFit::kFullShape);
       // Line 6: the feature's 10-NN in the scan and its normal, moved to the map frame.
       const Eigen::Vector3f n_scan =
-          detail::neighbourhood_axis(scan_tree_, kind, (*features_)[i], config_.scan_neighbours);
+          detail::neighbourhood_axis(scan_tree_, kind, (*features_)[i], config_.scan_neighbours,
+                                     detail::AxisFit::kFullShape);
       const Eigen::Vector3d n1 = R * n_scan.cast<double>();
       // Lines 7-10: keep consistent candidates until 5 are kept.
       if (detail::axes_agree(n1, n_map, cos_max_)) {

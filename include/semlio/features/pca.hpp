@@ -32,6 +32,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <utility>
@@ -87,51 +88,79 @@ inline Eigen::Vector3d separated_eigenvector(const Eigen::Matrix3d& A, double la
 
 }  // namespace detail
 
-/// Eigenvalues (ascending) and unit eigenvectors (columns) of the symmetric
-/// matrix C (only the upper triangle is read). Closed form, no allocation,
-/// deterministic; eigenvectors are defined up to sign (and, for repeated
-/// eigenvalues, up to rotation within their eigenspace). Non-finite input
-/// gives non-finite output; callers check their inputs.
-inline Eigen3 eigen_symmetric3(const Eigen::Matrix3d& C) {
-  Eigen3 out;
+/// Which end of the spectrum eigenvector_symmetric3 returns.
+enum class EigenEnd : std::uint8_t {
+  kSmallest,  ///< the smallest eigenvalue's vector (a neighbourhood's normal)
+  kLargest,   ///< the largest eigenvalue's vector (a neighbourhood's line direction)
+};
+
+namespace detail {
+
+/// Steps 1-3 of eigen_symmetric3 (file comment): C scaled by its largest
+/// entry to A, the shift q and spread p of B = (A - q I) / p, and B's
+/// eigenpair farthest from the other two.
+struct SymmetricSplit {
+  /// What kind of matrix C was; only kGeneral fills the fields below q.
+  enum class Kind : std::uint8_t { kNonFinite, kZero, kScalar, kGeneral };
+  Kind kind = Kind::kZero;
+  double scale = 0.0;             ///< largest |C_ij|
+  double q = 0.0;                 ///< trace(A) / 3
+  double p = 0.0;                 ///< sqrt(||A - q I||_F^2 / 6)
+  bool sep_is_largest = false;    ///< the separated eigenvalue is the largest (else the smallest)
+  Eigen::Matrix3d B = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d v_sep = Eigen::Vector3d::UnitX();  ///< unit eigenvector of the separated eigenvalue
+};
+
+inline SymmetricSplit split_symmetric3(const Eigen::Matrix3d& C) {
+  SymmetricSplit s;
   Eigen::Matrix3d A = C.selfadjointView<Eigen::Upper>();
   if (!A.allFinite()) {  // garbage in, NaN out (never a silent plausible answer)
-    out.values.setConstant(std::numeric_limits<double>::quiet_NaN());
-    return out;
+    s.kind = SymmetricSplit::Kind::kNonFinite;
+    return s;
   }
-  const double scale = A.cwiseAbs().maxCoeff();
-  if (!(scale > 0.0)) return out;  // zero matrix
-  A /= scale;
+  s.scale = A.cwiseAbs().maxCoeff();
+  if (!(s.scale > 0.0)) return s;  // zero matrix
+  A /= s.scale;
 
   // Trigonometric roots of det(A - lambda I) = 0 (Smith 1961).
-  const double q = A.trace() / 3.0;
+  s.q = A.trace() / 3.0;
   const double p1 = A(0, 1) * A(0, 1) + A(0, 2) * A(0, 2) + A(1, 2) * A(1, 2);
-  const double d0 = A(0, 0) - q;
-  const double d1 = A(1, 1) - q;
-  const double d2 = A(2, 2) - q;
+  const double d0 = A(0, 0) - s.q;
+  const double d1 = A(1, 1) - s.q;
+  const double d2 = A(2, 2) - s.q;
   const double p2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * p1;
   if (!(p2 > 0.0)) {  // A == q I
-    out.values.setConstant(q * scale);
-    return out;
+    s.kind = SymmetricSplit::Kind::kScalar;
+    return s;
   }
-  const double p = std::sqrt(p2 / 6.0);
-  Eigen::Matrix3d B = A;
-  B.diagonal().array() -= q;
-  B /= p;
-  const double r = std::clamp(B.determinant() / 2.0, -1.0, 1.0);
+  s.kind = SymmetricSplit::Kind::kGeneral;
+  s.p = std::sqrt(p2 / 6.0);
+  s.B = A;
+  s.B.diagonal().array() -= s.q;
+  s.B /= s.p;
+  const double r = std::clamp(s.B.determinant() / 2.0, -1.0, 1.0);
   const double phi = std::acos(r) / 3.0;
-  // Work on B = (A - q I) / p (trace-free, ||B||_F^2 = 6): its eigenvalues
-  // are 2 cos(phi + 2 pi k / 3), so tolerances are absolute and clusters of
-  // nearly equal eigenvalues (p << |q|) keep their relative precision.
-  const double beta_max = 2.0 * std::cos(phi);
-  const double beta_min = 2.0 * std::cos(phi + 2.0 * std::numbers::pi / 3.0);
+  // Work on B (trace-free, ||B||_F^2 = 6): its eigenvalues are
+  // 2 cos(phi + 2 pi k / 3), so tolerances are absolute and clusters of
+  // nearly equal eigenvalues (p << |q|) keep their relative precision. The
+  // eigenvalue farthest from the other two is the largest when r >= 0, else
+  // the smallest; only that one is needed (one cosine, not three).
+  s.sep_is_largest = r >= 0.0;
+  const double beta_sep =
+      s.sep_is_largest ? 2.0 * std::cos(phi) : 2.0 * std::cos(phi + 2.0 * std::numbers::pi / 3.0);
+  s.v_sep = separated_eigenvector(s.B, beta_sep);
+  return s;
+}
 
-  // The eigenvalue farthest from the other two (r >= 0: the largest).
-  const double beta_sep = (r >= 0.0) ? beta_max : beta_min;
-  const Eigen::Vector3d v_sep = detail::separated_eigenvector(B, beta_sep);
-
+/// The three eigenpairs of a kGeneral split in ascending order of their
+/// eigenvalues (unscaled), ties in the order (separated, deflated high,
+/// deflated low): step 4 of eigen_symmetric3 and a stable sort.
+inline void ordered_eigenpairs(const SymmetricSplit& s, std::array<double, 3>& values,
+                               std::array<Eigen::Vector3d, 3>& vectors) {
   // Deflate onto the orthogonal plane spanned by (u, w); Jacobi-rotate 2x2.
-  const Eigen::Vector3d u = detail::any_orthogonal(v_sep);
+  const Eigen::Matrix3d& B = s.B;
+  const Eigen::Vector3d& v_sep = s.v_sep;
+  const Eigen::Vector3d u = any_orthogonal(v_sep);
   const Eigen::Vector3d w = v_sep.cross(u).normalized();
   const Eigen::Vector3d Bu = B * u;
   const Eigen::Vector3d Bw = B * w;
@@ -145,29 +174,81 @@ inline Eigen3 eigen_symmetric3(const Eigen::Matrix3d& C) {
   // trigonometry: (e + half, b) when e >= 0, else (b, half - e) -- both exact
   // eigenvectors; the choice avoids cancellation. half == 0: any pair.
   double c = 1.0;
-  double s = 0.0;
+  double sn = 0.0;
   if (half > 0.0) {
     const double x = e >= 0.0 ? e + half : b;
     const double y = e >= 0.0 ? b : half - e;
     const double len = std::sqrt(x * x + y * y);
     c = x / len;
-    s = y / len;
+    sn = y / len;
   }
-  const Eigen::Vector3d v_hi = (c * u + s * w).normalized();
-  const Eigen::Vector3d v_lo = (c * w - s * u).normalized();
-  const double l_sep = q + p * v_sep.dot(B * v_sep);  // Rayleigh quotient: error ~ eps^2
-  const double l_hi = q + p * (mean + half);
-  const double l_lo = q + p * (mean - half);
+  const double l_sep = s.q + s.p * v_sep.dot(B * v_sep);  // Rayleigh quotient: error ~ eps^2
+  values = {l_sep, s.q + s.p * (mean + half), s.q + s.p * (mean - half)};
+  vectors = {v_sep, (c * u + sn * w).normalized(), (c * w - sn * u).normalized()};
+  // Stable insertion sort of three (swaps only on strictly less).
+  std::array<int, 3> o{0, 1, 2};
+  if (values[1] < values[0]) std::swap(o[0], o[1]);
+  if (values[2] < values[static_cast<std::size_t>(o[1])]) {
+    std::swap(o[1], o[2]);
+    if (values[static_cast<std::size_t>(o[1])] < values[static_cast<std::size_t>(o[0])]) std::swap(o[0], o[1]);
+  }
+  const std::array<double, 3> v0 = values;
+  const std::array<Eigen::Vector3d, 3> e0 = vectors;
+  for (std::size_t i = 0; i < 3; ++i) {
+    values[i] = v0[static_cast<std::size_t>(o[i])] * s.scale;
+    vectors[i] = e0[static_cast<std::size_t>(o[i])];
+  }
+}
 
-  std::array<std::pair<double, Eigen::Vector3d>, 3> pairs{
-      {{l_sep, v_sep}, {l_hi, v_hi}, {l_lo, v_lo}}};
-  std::sort(pairs.begin(), pairs.end(),
-            [](const auto& x, const auto& y) { return x.first < y.first; });
+/// Smallest spread p of a kGeneral split for which the separated eigenvalue
+/// is provably the extreme one after rounding: it lies >= sqrt(3) p from the
+/// other two, and each computed eigenvalue q + p x is off by at most a few
+/// ulps of |q| + 2p <= 3 (A is scaled to entries <= 1).
+inline constexpr double kSeparatedMinSpread = 1e-12;
+
+}  // namespace detail
+
+/// Eigenvalues (ascending) and unit eigenvectors (columns) of the symmetric
+/// matrix C (only the upper triangle is read). Closed form, no allocation,
+/// deterministic; eigenvectors are defined up to sign (and, for repeated
+/// eigenvalues, up to rotation within their eigenspace). Non-finite input
+/// gives non-finite output; callers check their inputs.
+inline Eigen3 eigen_symmetric3(const Eigen::Matrix3d& C) {
+  using Kind = detail::SymmetricSplit::Kind;
+  Eigen3 out;
+  const detail::SymmetricSplit s = detail::split_symmetric3(C);
+  if (s.kind == Kind::kNonFinite) {
+    out.values.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return out;
+  }
+  if (s.kind == Kind::kScalar) out.values.setConstant(s.q * s.scale);
+  if (s.kind != Kind::kGeneral) return out;  // zero or scalar matrix: identity basis
+  std::array<double, 3> values;
+  std::array<Eigen::Vector3d, 3> vectors;
+  detail::ordered_eigenpairs(s, values, vectors);
   for (int i = 0; i < 3; ++i) {
-    out.values[i] = pairs[static_cast<std::size_t>(i)].first * scale;
-    out.vectors.col(i) = pairs[static_cast<std::size_t>(i)].second;
+    out.values[i] = values[static_cast<std::size_t>(i)];
+    out.vectors.col(i) = vectors[static_cast<std::size_t>(i)];
   }
   return out;
+}
+
+/// Unit eigenvector of the smallest or largest eigenvalue of symmetric C:
+/// bit for bit eigen_symmetric3(C).vectors.col(0) or col(2), for less. When
+/// that eigenvalue is the separated one (a planar neighbourhood's normal, a
+/// linear one's direction: most calls) the deflation and the sort are
+/// skipped. Non-finite C gives the identity's column, as eigen_symmetric3.
+inline Eigen::Vector3d eigenvector_symmetric3(const Eigen::Matrix3d& C, EigenEnd end) {
+  const detail::SymmetricSplit s = detail::split_symmetric3(C);
+  const bool largest = end == EigenEnd::kLargest;
+  if (s.kind != detail::SymmetricSplit::Kind::kGeneral) {
+    return largest ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
+  }
+  if (s.sep_is_largest == largest && s.p > detail::kSeparatedMinSpread) return s.v_sep;
+  std::array<double, 3> values;
+  std::array<Eigen::Vector3d, 3> vectors;
+  detail::ordered_eigenpairs(s, values, vectors);
+  return vectors[largest ? 2 : 0];
 }
 
 /// Shape of a point neighbourhood (eq. 3-6): centroid, covariance eigenvalues,
@@ -180,6 +261,26 @@ struct LocalShape {
   bool valid = false;  ///< n >= 2 and finite covariance; the normal is meaningful only for n >= 3
 };
 
+namespace detail {
+
+/// Mean and covariance = (1/N) sum (p - mean)(p - mean)^T of the n >= 1
+/// points point_at(0..n-1), two-pass and centred, in double (eq. 3-4).
+template <typename PointAt>
+void mean_covariance(std::size_t n, PointAt& point_at, Eigen::Vector3d& mean, Eigen::Matrix3d& cov) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) sum += point_at(i).template cast<double>();
+  const double inv_n = 1.0 / static_cast<double>(n);
+  mean = sum * inv_n;
+  cov.setZero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d d = point_at(i).template cast<double>() - mean;
+    cov.noalias() += d * d.transpose();
+  }
+  cov *= inv_n;
+}
+
+}  // namespace detail
+
 /// Fits eq. 3-6 to the n points point_at(0..n-1) (each returning an
 /// Eigen::Vector3d or Vector3f): mean, covariance = (1/N) sum (p - mean)(p -
 /// mean)^T (two-pass, centred, in double), its eigen-decomposition. Planarity /
@@ -189,16 +290,8 @@ template <typename PointAt>
 LocalShape fit_local_shape(std::size_t n, PointAt point_at) {
   LocalShape shape;
   if (n == 0) return shape;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < n; ++i) sum += point_at(i).template cast<double>();
-  const double inv_n = 1.0 / static_cast<double>(n);
-  shape.mean = sum * inv_n;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = point_at(i).template cast<double>() - shape.mean;
-    cov.noalias() += d * d.transpose();
-  }
-  cov *= inv_n;
+  Eigen::Matrix3d cov;
+  detail::mean_covariance(n, point_at, shape.mean, cov);
   if (n < 2 || !cov.allFinite()) return shape;
   const Eigen3 eig = eigen_symmetric3(cov);
   shape.eigenvalues = eig.values.cwiseMax(0.0);  // a covariance is PSD; clip rounding
@@ -206,6 +299,22 @@ LocalShape fit_local_shape(std::size_t n, PointAt point_at) {
   shape.direction = eig.vectors.col(2);
   shape.valid = true;
   return shape;
+}
+
+/// One axis of the n points' shape -- the normal (EigenEnd::kSmallest) or
+/// the line direction (kLargest) -- bit for bit fit_local_shape(n,
+/// point_at)'s, without the rest of the fit (eigenvector_symmetric3): what
+/// the associators' per-point axes need. Returns false where
+/// fit_local_shape's `valid` is false (axis untouched).
+template <typename PointAt>
+bool fit_local_axis(std::size_t n, PointAt point_at, EigenEnd end, Eigen::Vector3d& axis) {
+  if (n < 2) return false;
+  Eigen::Vector3d mean;
+  Eigen::Matrix3d cov;
+  detail::mean_covariance(n, point_at, mean, cov);
+  if (!cov.allFinite()) return false;
+  axis = eigenvector_symmetric3(cov, end);
+  return true;
 }
 
 }  // namespace semlio

@@ -126,23 +126,35 @@ inline Eigen::Vector3f shape_axis(FeatureKind kind, std::size_t n, const LocalSh
   return axis.cast<float>();
 }
 
+/// How neighbourhood_axis fits: the full eq. 3-6 fit (fit_local_shape, the
+/// literal form NormalConsistencyReference reads) or only the one axis
+/// (fit_local_axis: bit for bit the same vector, for less).
+enum class AxisFit : std::uint8_t { kAxisOnly, kFullShape };
+
 /// Axis of the tree points idx[0..n-1] (eq. 3-6). Tree: KdTree3f or
 /// SmallKdTree3f (anything with point(i) and knn(q, k, idx, sq_dist)).
 template <typename Tree>
-Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const std::uint32_t* idx, std::size_t n) {
-  const LocalShape shape =
-      fit_local_shape(n, [&](std::size_t i) -> const Eigen::Vector3f& { return tree.point(idx[i]); });
-  return shape_axis(kind, n, shape);
+Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const std::uint32_t* idx, std::size_t n,
+                                   AxisFit fit = AxisFit::kAxisOnly) {
+  const auto point_at = [&](std::size_t i) -> const Eigen::Vector3f& { return tree.point(idx[i]); };
+  if (fit == AxisFit::kFullShape) return shape_axis(kind, n, fit_local_shape(n, point_at));
+  Eigen::Vector3d axis;
+  if (n < static_cast<std::size_t>(min_points(kind)) ||
+      !fit_local_axis(n, point_at, kind == FeatureKind::kPlane ? EigenEnd::kSmallest : EigenEnd::kLargest, axis)) {
+    return Eigen::Vector3f::Zero();
+  }
+  return axis.cast<float>();
 }
 
 /// Axis of the neighbourhood of query q in tree: eq. 3-6 over the k nearest
 /// tree points (q itself included when it is a tree point). Allocation-free.
 template <typename Tree>
-Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const Eigen::Vector3f& q, int k) {
+Eigen::Vector3f neighbourhood_axis(const Tree& tree, FeatureKind kind, const Eigen::Vector3f& q, int k,
+                                   AxisFit fit = AxisFit::kAxisOnly) {
   std::array<std::uint32_t, kMaxShapeNeighbours> idx;  // uninitialised (see kMaxCandidateList)
   std::array<float, kMaxShapeNeighbours> d2;
   const std::size_t n = tree.knn(q, static_cast<std::size_t>(k), idx.data(), d2.data());
-  return neighbourhood_axis(tree, kind, idx.data(), n);
+  return neighbourhood_axis(tree, kind, idx.data(), n, fit);
 }
 
 /// Squared distance with nanoflann's L2_Simple arithmetic (float, x then y then
