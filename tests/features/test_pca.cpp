@@ -265,4 +265,36 @@ TEST_CASE("fit_local_axis equals fit_local_shape's normal and direction on real 
   CHECK(separated * 2 == queries);  // every real neighbourhood is general and well spread
 }
 
+TEST_CASE("mean_covariance equals the literal outer-product sum bit for bit", "[features]") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int differing = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const std::size_t n = 2 + static_cast<std::size_t>(trial % 15);
+    const double scale = std::pow(10.0, 3.0 * u(rng));
+    const Vector3d offset = Vector3d(u(rng), u(rng), u(rng)) * 50.0;
+    std::vector<Eigen::Vector3f> pts;
+    for (std::size_t i = 0; i < n; ++i) {
+      pts.push_back((offset + scale * Vector3d(u(rng), 0.3 * u(rng), 0.01 * u(rng))).cast<float>());
+    }
+    // Eq. 3-4 written out: (1/N) sum (p - mean)(p - mean)^T.
+    Vector3d sum = Vector3d::Zero();
+    for (const auto& p : pts) sum += p.cast<double>();
+    const double inv_n = 1.0 / static_cast<double>(n);
+    const Vector3d mean_ref = sum * inv_n;
+    Matrix3d cov_ref = Matrix3d::Zero();
+    for (const auto& p : pts) {
+      const Vector3d d = p.cast<double>() - mean_ref;
+      cov_ref.noalias() += d * d.transpose();
+    }
+    cov_ref *= inv_n;
+    auto at = [&](std::size_t i) -> const Eigen::Vector3f& { return pts[i]; };
+    Vector3d mean;
+    Matrix3d cov;
+    semlio::detail::mean_covariance(n, at, mean, cov);
+    differing += same_bits(mean, mean_ref) && std::memcmp(cov.data(), cov_ref.data(), sizeof(double) * 9) == 0 ? 0 : 1;
+  }
+  CHECK(differing == 0);
+}
+
 }  // namespace test_pca

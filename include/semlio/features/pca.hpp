@@ -271,12 +271,26 @@ void mean_covariance(std::size_t n, PointAt& point_at, Eigen::Vector3d& mean, Ei
   for (std::size_t i = 0; i < n; ++i) sum += point_at(i).template cast<double>();
   const double inv_n = 1.0 / static_cast<double>(n);
   mean = sum * inv_n;
-  cov.setZero();
+  // The six distinct entries only (x * y == y * x in IEEE arithmetic, so the
+  // mirrored ones are the same bits an outer product would give).
+  double xx = 0.0;
+  double xy = 0.0;
+  double xz = 0.0;
+  double yy = 0.0;
+  double yz = 0.0;
+  double zz = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d d = point_at(i).template cast<double>() - mean;
-    cov.noalias() += d * d.transpose();
+    xx += d.x() * d.x();
+    xy += d.x() * d.y();
+    xz += d.x() * d.z();
+    yy += d.y() * d.y();
+    yz += d.y() * d.z();
+    zz += d.z() * d.z();
   }
-  cov *= inv_n;
+  cov << xx * inv_n, xy * inv_n, xz * inv_n,  //
+      xy * inv_n, yy * inv_n, yz * inv_n,     //
+      xz * inv_n, yz * inv_n, zz * inv_n;
 }
 
 }  // namespace detail
