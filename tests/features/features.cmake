@@ -1,4 +1,4 @@
-# Features and search area: preprocessing, rings, LOAM features, PCA, k-d tree,
+# Features and search area: preprocessing, rings, LOAM features, PCA, k-d tree, k-best,
 # voxel grid (paths relative to tests/).
 set(SEMLIO_TESTS_features_features
   features/test_pca.cpp
@@ -6,4 +6,5 @@ set(SEMLIO_TESTS_features_features
   features/test_preprocess.cpp
   features/test_loam_features.cpp
   search/test_kdtree.cpp
+  search/test_k_best.cpp
   search/test_voxel_grid.cpp)

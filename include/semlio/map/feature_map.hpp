@@ -363,7 +363,7 @@ class FeatureMap {
   std::size_t nearest(const Eigen::Vector3f& q, std::size_t k, double max_sq_dist_m2, std::uint32_t* idx,
                       float* sq_dist) const {
     if (k == 0 || empty()) return 0;
-    if (list_len_ > 0) {
+    if (list_len_ > 0 && k <= detail::kKBestMax) {
       std::uint32_t anchor = 0;
       float anchor_d2 = 0.0F;
       anchor_of(q, anchor, anchor_d2);
@@ -377,7 +377,7 @@ class FeatureMap {
       const double anchor_m = std::sqrt(static_cast<double>(anchor_d2));
       // The margin covers float rounding of the distances [m].
       const double margin = 1e-4 + 1e-6 * (std::isfinite(radius) ? radius : 0.0);
-      std::size_t count = 0;
+      detail::KBest best(k);
       for (std::size_t j = 0; j < list_len_; ++j) {
         // The list ascends in distance from the anchor, so entry j and every
         // later one lie at least dist_m[j] - anchor_m from q (triangle
@@ -385,19 +385,19 @@ class FeatureMap {
         // enter the answer. On sparse maps (corners) the 32 entries reach far
         // beyond the gate and most are never evaluated.
         const double lower = static_cast<double>(dist_m[j]) - anchor_m - margin;
-        if (lower > 0.0 &&
-            lower * lower > (count == k ? static_cast<double>(sq_dist[k - 1]) : max_sq_dist_m2)) {
+        if (lower > 0.0 && lower * lower > (best.full() ? static_cast<double>(best.worst()) : max_sq_dist_m2)) {
           break;
         }
         const float d = detail::nanoflann_sq_distance(q, pts[list[j]]);
-        if (static_cast<double>(d) <= max_sq_dist_m2) count = detail::insert_by_distance_index(d, list[j], idx, sq_dist, count, k);
+        if (static_cast<double>(d) <= max_sq_dist_m2) best.offer(d, list[j]);
       }
       // Everything within `reach` of q lies in the anchor's list, so the list
       // answer is exact when the k-th candidate (or, with fewer, the gate) is
       // nearer than that.
       const double reach = radius - anchor_m;
-      const double needed = count == k ? std::sqrt(static_cast<double>(sq_dist[k - 1])) : std::sqrt(max_sq_dist_m2);
-      if (needed + margin < reach) return count;
+      const double needed =
+          best.full() ? std::sqrt(static_cast<double>(best.worst())) : std::sqrt(max_sq_dist_m2);
+      if (needed + margin < reach) return best.write(idx, sq_dist);
     }
     // The k-d tree's k-NN cut at the gate, searched only inside the gate.
     return tree_.knn(q, k, idx, sq_dist, detail::float_gate(max_sq_dist_m2));
@@ -425,25 +425,25 @@ class FeatureMap {
       const auto radius = static_cast<double>(radius_f);
       const double moved = std::sqrt(static_cast<double>(detail::nanoflann_sq_distance(q, cache.q0_[slot])));
       const double margin = 1e-4 + 1e-6 * (std::isfinite(radius) ? radius : 0.0);
-      std::size_t count = 0;
+      detail::KBest best(k);
       for (std::size_t j = 0; j < stored; ++j) {
         // The list ascends in distance from q0, so entry j and every later one
         // lie at least dist0[j] - moved from q (triangle inequality): once that
         // exceeds the k-th distance found (or the gate) by the rounding
         // margin, none of them can enter the answer.
         const double lower = static_cast<double>(dist0[j]) - moved - margin;
-        if (lower > 0.0 &&
-            lower * lower > (count == k ? static_cast<double>(sq_dist[k - 1]) : max_sq_dist_m2)) {
+        if (lower > 0.0 && lower * lower > (best.full() ? static_cast<double>(best.worst()) : max_sq_dist_m2)) {
           break;
         }
         const float d = detail::nanoflann_sq_distance(q, pts[list[j]]);
-        if (static_cast<double>(d) <= max_sq_dist_m2) count = detail::insert_by_distance_index(d, list[j], idx, sq_dist, count, k);
+        if (static_cast<double>(d) <= max_sq_dist_m2) best.offer(d, list[j]);
       }
       const double reach = radius - moved;
-      const double needed = count == k ? std::sqrt(static_cast<double>(sq_dist[k - 1])) : std::sqrt(max_sq_dist_m2);
+      const double needed =
+          best.full() ? std::sqrt(static_cast<double>(best.worst())) : std::sqrt(max_sq_dist_m2);
       if (needed + margin < reach) {
         ++cache.hits_;
-        return count;
+        return best.write(idx, sq_dist);
       }
     }
     // Refill at q: the L nearest within the gate plus a slack for motion (one

@@ -126,6 +126,11 @@ class SmallKdTree3f {
   /// KdTree3f::knn on the same points. Allocates nothing.
   std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* idx, float* sq_dist) const {
     if (k == 0 || empty()) return 0;
+    if (k <= detail::kKBestMax) {
+      KeyResult r{detail::KBest(k), 0.0F};
+      search<false>(q, r);
+      return r.best.write(idx, sq_dist);
+    }
     Result r{idx, sq_dist, k, 0, 0.0F};
     search<false>(q, r);
     return r.count;
@@ -138,6 +143,11 @@ class SmallKdTree3f {
   std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* idx, float* sq_dist,
                   float max_sq_dist) const {
     if (k == 0 || empty() || !(max_sq_dist >= 0.0F)) return 0;
+    if (k <= detail::kKBestMax) {
+      KeyResult r{detail::KBest(k), max_sq_dist};
+      search<true>(q, r);
+      return r.best.write(idx, sq_dist);
+    }
     Result r{idx, sq_dist, k, 0, max_sq_dist};
     search<true>(q, r);
     return r.count;
@@ -159,6 +169,7 @@ class SmallKdTree3f {
     std::uint8_t axis;
   };
 
+  // The k best so far, written straight into the caller's arrays (any k).
   struct Result {
     std::uint32_t* idx;
     float* d2;
@@ -166,11 +177,23 @@ class SmallKdTree3f {
     std::size_t count;
     float cap;  // largest admitted squared distance (bounded searches only)
     [[nodiscard]] bool full() const { return count == k; }
+    [[nodiscard]] float worst() const { return d2[k - 1]; }
     // What a point or subtree must not exceed to matter: the k-th distance
     // once full (<= cap, as every entry is), else the cap.
-    [[nodiscard]] float limit() const { return full() ? d2[k - 1] : cap; }
+    [[nodiscard]] float limit() const { return full() ? worst() : cap; }
     // Admits (d, i) when it beats the current k-th by (distance, index).
     void add(float d, std::uint32_t i) { count = detail::insert_by_distance_index(d, i, idx, d2, count, k); }
+  };
+
+  // The same for k <= kKBestMax, kept as keys (detail::KBest: cheaper
+  // insertions) and written out once at the end.
+  struct KeyResult {
+    detail::KBest best;
+    float cap;
+    [[nodiscard]] bool full() const { return best.full(); }
+    [[nodiscard]] float worst() const { return best.worst(); }
+    [[nodiscard]] float limit() const { return full() ? worst() : cap; }
+    void add(float d, std::uint32_t i) { best.offer(d, i); }
   };
 
   static float sq_dist(const Eigen::Vector3f& q, const Eigen::Vector3f& p) {
@@ -230,8 +253,8 @@ class SmallKdTree3f {
   // points with squared distance <= r.cap; a template parameter, so that the
   // unbounded search pays nothing for it (one search with an infinite cap
   // made 32-NN list queries 3-9 % slower, MapKnn/list, three alternated runs).
-  template <bool Bounded>
-  void search(const Eigen::Vector3f& q, Result& r) const {
+  template <bool Bounded, typename R>
+  void search(const Eigen::Vector3f& q, R& r) const {
     struct Pending {
       std::uint32_t node;
       float bound;
@@ -264,7 +287,7 @@ class SmallKdTree3f {
       if constexpr (Bounded) {
         limit = r.limit();
       } else {
-        if (r.full()) limit = r.d2[r.k - 1];
+        if (r.full()) limit = r.worst();
       }
       scan_leaf(n, q, limit, r);
       // Resume at the deepest far side whose bound does not strictly exceed
@@ -277,7 +300,7 @@ class SmallKdTree3f {
         if constexpr (Bounded) {
           visit = p.bound <= r.limit();
         } else {
-          visit = !r.full() || p.bound <= r.d2[r.k - 1];
+          visit = !r.full() || p.bound <= r.worst();
         }
         if (visit) {
           node = p.node;
@@ -291,7 +314,8 @@ class SmallKdTree3f {
   // Offers every point of leaf n with squared distance not above `limit`
   // (NaN distances too, as the scalar test `d > limit` lets them pass) to r,
   // in leaf order.
-  void scan_leaf(const Node& n, const Eigen::Vector3f& q, float limit, Result& r) const {
+  template <typename R>
+  void scan_leaf(const Node& n, const Eigen::Vector3f& q, float limit, R& r) const {
     const float* b = blocks_.data() + static_cast<std::size_t>(n.right) * kBlock;
     const std::uint32_t count = n.end - n.begin;
 #if defined(SEMLIO_KDTREE_SSE2)
