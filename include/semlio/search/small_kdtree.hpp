@@ -273,11 +273,21 @@ class SmallKdTree3f {
       if (n.left != 0) {
         const float diff = q[n.axis] - n.split;
         // Every far-side point p has |q_a - p_a| >= |diff| (the split lies between them).
-        Pending& far = stack[top++];
+        Pending& far = stack[top];
         far.node = diff <= 0.0F ? n.right : n.left;
         far.off = off;
         far.off[n.axis] = std::max(off[n.axis], diff * diff);
         far.bound = (far.off[0] + far.off[1]) + far.off[2];
+        // A far side already out of reach stays so (the limit only shrinks):
+        // not pushing it skips only what the resume test below would skip,
+        // so the leaves visited, their order and the results are unchanged.
+        bool keep = true;
+        if constexpr (Bounded) {
+          keep = far.bound <= r.limit();
+        } else {
+          keep = !r.full() || far.bound <= r.worst();
+        }
+        top += keep ? 1U : 0U;
         node = diff <= 0.0F ? n.left : n.right;
         continue;
       }
