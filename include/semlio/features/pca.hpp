@@ -112,10 +112,11 @@ struct SymmetricSplit {
   double q = 0.0;                 ///< trace(A) / 3
   double p = 0.0;                 ///< sqrt(||A - q I||_F^2 / 6)
   bool sep_is_largest = false;    ///< the separated eigenvalue is the largest (else the smallest)
-  Eigen::Matrix3d B = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d B = Eigen::Matrix3d::Zero();  ///< (A - q I) / p: trace-free, ||B||_F^2 = 6
   Eigen::Vector3d v_sep = Eigen::Vector3d::UnitX();  ///< unit eigenvector of the separated eigenvalue
 };
 
+/// Steps 1-3 of eigen_symmetric3 for C (only its upper triangle is read).
 inline SymmetricSplit split_symmetric3(const Eigen::Matrix3d& C) {
   SymmetricSplit s;
   Eigen::Matrix3d A = C.selfadjointView<Eigen::Upper>();
