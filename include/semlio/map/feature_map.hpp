@@ -377,6 +377,11 @@ class FeatureMap {
       const double anchor_m = std::sqrt(static_cast<double>(anchor_d2));
       // The margin covers float rounding of the distances [m].
       const double margin = 1e-4 + 1e-6 * (std::isfinite(radius) ? radius : 0.0);
+      // As the cache hits' loop below: one subtraction for the bound, a
+      // float gate, the k-th distance kept as a double.
+      const double anchor_margin = anchor_m + margin;
+      const float gate_f = detail::float_gate(max_sq_dist_m2);
+      double limit = max_sq_dist_m2;  // the k-th distance found once full, else the gate
       detail::KBest best(k);
       for (std::size_t j = 0; j < list_len_; ++j) {
         // The list ascends in distance from the anchor, so entry j and every
@@ -384,12 +389,13 @@ class FeatureMap {
         // inequality): past the k-th distance found (or the gate) none can
         // enter the answer. On sparse maps (corners) the 32 entries reach far
         // beyond the gate and most are never evaluated.
-        const double lower = static_cast<double>(dist_m[j]) - anchor_m - margin;
-        if (lower > 0.0 && lower * lower > (best.full() ? static_cast<double>(best.worst()) : max_sq_dist_m2)) {
-          break;
-        }
+        const double lower = static_cast<double>(dist_m[j]) - anchor_margin;
+        if (lower > 0.0 && lower * lower > limit) break;
         const float d = detail::nanoflann_sq_distance(q, pts[list[j]]);
-        if (static_cast<double>(d) <= max_sq_dist_m2) best.offer(d, list[j]);
+        if (d <= gate_f) {
+          best.offer(d, list[j]);
+          if (best.full()) limit = static_cast<double>(best.worst());
+        }
       }
       // Everything within `reach` of q lies in the anchor's list, so the list
       // answer is exact when the k-th candidate (or, with fewer, the gate) is
@@ -425,18 +431,26 @@ class FeatureMap {
       const auto radius = static_cast<double>(radius_f);
       const double moved = std::sqrt(static_cast<double>(detail::nanoflann_sq_distance(q, cache.q0_[slot])));
       const double margin = 1e-4 + 1e-6 * (std::isfinite(radius) ? radius : 0.0);
+      // Per entry (the hottest loop of a Gauss-Newton iteration after the
+      // first): one subtraction for the bound (the margin absorbs its
+      // rounding as before), a float gate (float_gate: the same test as the
+      // double one) and the k-th distance kept as a double.
+      const double moved_margin = moved + margin;
+      const float gate_f = detail::float_gate(max_sq_dist_m2);
+      double limit = max_sq_dist_m2;  // the k-th distance found once full, else the gate
       detail::KBest best(k);
       for (std::size_t j = 0; j < stored; ++j) {
         // The list ascends in distance from q0, so entry j and every later one
         // lie at least dist0[j] - moved from q (triangle inequality): once that
         // exceeds the k-th distance found (or the gate) by the rounding
         // margin, none of them can enter the answer.
-        const double lower = static_cast<double>(dist0[j]) - moved - margin;
-        if (lower > 0.0 && lower * lower > (best.full() ? static_cast<double>(best.worst()) : max_sq_dist_m2)) {
-          break;
-        }
+        const double lower = static_cast<double>(dist0[j]) - moved_margin;
+        if (lower > 0.0 && lower * lower > limit) break;
         const float d = detail::nanoflann_sq_distance(q, pts[list[j]]);
-        if (static_cast<double>(d) <= max_sq_dist_m2) best.offer(d, list[j]);
+        if (d <= gate_f) {
+          best.offer(d, list[j]);
+          if (best.full()) limit = static_cast<double>(best.worst());
+        }
       }
       const double reach = radius - moved;
       const double needed =
