@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -177,6 +178,86 @@ TEST_CASE("a stray point just below 2pi does not split a ring", "[features]") {
   CHECK(std::count(scan.rings.begin(), scan.rings.end(), 1) == 361);
   CHECK(scan.rings.front() == 1);
   CHECK(scan.rings.back() == 0);
+}
+
+/// ring_starts_from_order as first written: every point's azimuth compared.
+std::vector<std::size_t> literal_ring_starts(const std::vector<Eigen::Vector3f>& pts) {
+  std::vector<std::size_t> begins;
+  if (pts.empty()) return begins;
+  begins.push_back(0);
+  constexpr double kPi = std::numbers::pi;
+  bool passed_rear = false;
+  double prev = semlio::detail::azimuth_0_2pi(pts[0]);
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    if (prev > kPi / 2.0 && prev < 1.5 * kPi) passed_rear = true;
+    const double s = semlio::detail::azimuth_0_2pi(pts[i]);
+    if (s < prev - kPi && passed_rear) {
+      begins.push_back(i);
+      passed_rear = false;
+    }
+    prev = s;
+  }
+  return begins;
+}
+
+TEST_CASE("ring starts from sign tests equal those from every point's azimuth", "[features]") {
+  std::vector<std::size_t> begins;
+  SECTION("the real KITTI scans") {
+    for (const char* name : {"000000.bin", "000001.bin"}) {
+      const semlio::Scan scan =
+          semlio::io::read_kitti_bin(semlio_test::data_path(std::string("kitti/sequences/00/velodyne/") + name));
+      semlio::ring_starts_from_order(scan.points, begins);
+      CHECK(begins.size() == 64);
+      CHECK(begins == literal_ring_starts(scan.points));
+    }
+  }
+  SECTION("random and adversarial points") {
+    // Points on and next to both axes (the fast path's boundaries), signed
+    // zeros, tiny and huge coordinates, NaN and infinities, in random order:
+    // every transition the fast path shortcuts meets its boundary cases.
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    const std::vector<float> special = {0.0F, -0.0F, 1e-30F, -1e-30F, 1e-7F, -1e-7F, 1e-6F, -1e-6F,
+                                        1.0F, -1.0F, 50.0F, -50.0F, 1e30F, -1e30F, nan, inf, -inf,
+                                        std::numeric_limits<float>::denorm_min(), -std::numeric_limits<float>::denorm_min()};
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<std::size_t> pick(0, special.size() - 1);
+    std::uniform_real_distribution<float> uni(-1.0F, 1.0F);
+    std::uniform_real_distribution<double> az(0.0, 2.0 * std::numbers::pi);
+    std::size_t total_rings = 0;
+    for (int trial = 0; trial < 1000; ++trial) {
+      std::vector<Eigen::Vector3f> pts;
+      const int n = 500;
+      for (int i = 0; i < n; ++i) {
+        const int kind = static_cast<int>(rng() % 4);
+        float x = 0.0F;
+        float y = 0.0F;
+        if (kind == 0) {  // special values on either coordinate
+          x = special[pick(rng)];
+          y = special[pick(rng)];
+        } else if (kind == 1) {  // next to an axis: one coordinate ~1e-6 of the other
+          const float big = 10.0F * uni(rng);
+          const float small = big * 1e-6F * (1.0F + uni(rng));
+          if (rng() % 2 == 0) {
+            x = small;
+            y = big;
+          } else {
+            x = big;
+            y = small;
+          }
+        } else {  // a sweep-like azimuth (wraps often) or anything
+          const double a = kind == 2 ? az(rng) : 0.0;
+          x = kind == 2 ? static_cast<float>(10.0 * std::cos(a)) : 10.0F * uni(rng);
+          y = kind == 2 ? static_cast<float>(10.0 * std::sin(a)) : 10.0F * uni(rng);
+        }
+        pts.emplace_back(x, y, uni(rng));
+      }
+      semlio::ring_starts_from_order(pts, begins);
+      REQUIRE(begins == literal_ring_starts(pts));
+      total_rings += begins.size();
+    }
+    CHECK(total_rings > 1000 * 20);  // the comparison saw many ring starts, not only the first
+  }
 }
 
 TEST_CASE("sensor tables", "[features]") {

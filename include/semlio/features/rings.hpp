@@ -40,6 +40,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -95,26 +96,55 @@ inline double azimuth_0_2pi(const Eigen::Vector3f& p) {
 
 }  // namespace detail
 
+namespace detail {
+
+/// azimuth_0_2pi(p) in (pi/2, 3pi/2), decided by the sign of x wherever
+/// |x| > 1e-6 |y| (atan2_fast's result then lies at least ~1e-6 rad inside
+/// its half-plane, far beyond its rounding), by the azimuth itself only near
+/// the y axis or for non-finite input.
+inline bool in_rear_half(const Eigen::Vector3f& p) {
+  const double x = p.x();
+  const double ax = std::abs(x);
+  if (ax > 1e-6 * std::abs(static_cast<double>(p.y()))) return x < 0.0;
+  const double a = azimuth_0_2pi(p);
+  return a > std::numbers::pi / 2.0 && a < 1.5 * std::numbers::pi;
+}
+
+/// azimuth_0_2pi(c) < azimuth_0_2pi(p) - pi, the azimuths computed only
+/// where the answer can be true. Why that is only when p.y() < 0 <= c.y():
+/// for y >= 0 atan2_fast returns r in [0, pi], so az(p) <= pi makes the
+/// right side <= 0 and no azimuth is below it; for y < 0 (a float, so
+/// r > 0 unless x is infinite) az = 2pi - r >= pi, so with both below the x
+/// axis az(c) >= pi >= az(p) - pi. NaN input compares false either way.
+inline bool wraps_around(const Eigen::Vector3f& p, const Eigen::Vector3f& c) {
+  if (!(p.y() < 0.0F)) return false;
+  if (c.y() < 0.0F && std::abs(c.x()) <= std::numeric_limits<float>::max()) return false;
+  return azimuth_0_2pi(c) < azimuth_0_2pi(p) - std::numbers::pi;
+}
+
+}  // namespace detail
+
 /// Start index of every ring found in point order: a new ring starts where az
 /// mod 2pi drops by more than pi, once the current ring has reached the rear
 /// half (az in (pi/2, 3pi/2)) -- so a stray point just below 2pi at a ring's
 /// start cannot split it. begins is cleared; begins[0] = 0 when pts is not empty.
+/// Cost: sign tests per point, atan2_fast only where a ring can wrap (the
+/// points that cross the x axis from y < 0) or near the y axis -- the same
+/// decisions as comparing every point's azimuth (detail::in_rear_half,
+/// detail::wraps_around; tests compare with that literal form), for ~1/30
+/// of the atan2 calls on KITTI scans.
 inline void ring_starts_from_order(const std::vector<Eigen::Vector3f>& pts,
                                    std::vector<std::size_t>& begins) {
   begins.clear();
   if (pts.empty()) return;
   begins.push_back(0);
-  constexpr double kPi = std::numbers::pi;
   bool passed_rear = false;
-  double prev = detail::azimuth_0_2pi(pts[0]);
   for (std::size_t i = 1; i < pts.size(); ++i) {
-    if (prev > kPi / 2.0 && prev < 1.5 * kPi) passed_rear = true;
-    const double s = detail::azimuth_0_2pi(pts[i]);
-    if (s < prev - kPi && passed_rear) {
+    if (!passed_rear && detail::in_rear_half(pts[i - 1])) passed_rear = true;
+    if (passed_rear && detail::wraps_around(pts[i - 1], pts[i])) {
       begins.push_back(i);
       passed_rear = false;
     }
-    prev = s;
   }
 }
 
