@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <random>
@@ -149,6 +151,46 @@ TEST_CASE("A reused VoxelGrid equals a fresh one across calls that grow and shri
     std::set<std::uint64_t> keys;
     for (const Vector3f& p : pts) keys.insert(semlio::voxel_key(p, 4.0));
     CHECK(a_pts.size() == keys.size());
+  }
+}
+
+TEST_CASE("voxel_key equals the floor-and-clamp formula, on cell edges and far points too", "[search]") {
+  // The literal key: floor each scaled coordinate, clamp into 21 bits.
+  const auto literal = [](const Vector3f& p, double inv_leaf) {
+    constexpr std::int64_t kHalf = std::int64_t{1} << 20;
+    std::uint64_t key = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double c = std::floor(static_cast<double>(p[a]) * inv_leaf);
+      const double clamped = std::clamp(c, -static_cast<double>(kHalf), static_cast<double>(kHalf - 1));
+      key = (key << 21) | static_cast<std::uint64_t>(static_cast<std::int64_t>(clamped) + kHalf);
+    }
+    return key;
+  };
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> near(-3.0F, 3.0F);
+  std::uniform_int_distribution<int> cell(-2000, 2000);
+  std::uniform_real_distribution<double> log_mag(-40.0, 38.0);
+  const std::vector<double> inv_leaves = {1.0 / 0.4, 1.0 / 0.2, 5.0, 1.0, 1e-3, 1e6};
+  for (const double inv_leaf : inv_leaves) {
+    for (int i = 0; i < 20000; ++i) {
+      Vector3f p;
+      for (int a = 0; a < 3; ++a) {
+        switch (rng() % 5) {
+          case 0: p[a] = near(rng); break;
+          // On a cell boundary, and one float step either side of it.
+          case 1: {
+            const auto edge = static_cast<float>(cell(rng) / inv_leaf);
+            const int step = static_cast<int>(rng() % 3) - 1;
+            p[a] = step == 0 ? edge : std::nextafter(edge, step > 0 ? 1e30F : -1e30F);
+            break;
+          }
+          case 2: p[a] = static_cast<float>((rng() % 2 == 0 ? 1.0 : -1.0) * std::pow(10.0, log_mag(rng))); break;
+          case 3: p[a] = (rng() % 2 == 0 ? 1.0F : -1.0F) * std::numeric_limits<float>::max(); break;
+          default: p[a] = rng() % 2 == 0 ? 0.0F : -0.0F; break;
+        }
+      }
+      REQUIRE(semlio::voxel_key(p, inv_leaf) == literal(p, inv_leaf));
+    }
   }
 }
 
