@@ -182,6 +182,13 @@ void check_end_vectors(const Matrix3d& C, int& separated) {
   INFO("C =\n" << C << "\nfull\n" << full.vectors << "\nsmallest " << lo.transpose() << "\nlargest " << hi.transpose());
   CHECK(same_bits(lo, full.vectors.col(0)));
   CHECK(same_bits(hi, full.vectors.col(2)));
+  // The values-and-one-vector form a residual's fit uses: the same bits too.
+  for (const semlio::EigenEnd end : {semlio::EigenEnd::kSmallest, semlio::EigenEnd::kLargest}) {
+    Vector3d values = Vector3d::Constant(7.0);
+    const Vector3d v = semlio::eigen_symmetric3_end(C, end, values);
+    CHECK(same_bits(values, full.values));
+    CHECK(same_bits(v, full.vectors.col(end == semlio::EigenEnd::kSmallest ? 0 : 2)));
+  }
   const semlio::detail::SymmetricSplit s = semlio::detail::split_symmetric3(C);
   if (s.kind == semlio::detail::SymmetricSplit::Kind::kGeneral && s.p > semlio::detail::kSeparatedMinSpread) {
     ++separated;
@@ -230,7 +237,7 @@ TEST_CASE("eigenvector_symmetric3 equals eigen_symmetric3's end columns bit for 
   }
 }
 
-TEST_CASE("fit_local_axis equals fit_local_shape's normal and direction on real KITTI neighbourhoods",
+TEST_CASE("fit_local_axis and fit_local_shape_axis equal fit_local_shape on real KITTI neighbourhoods",
           "[features]") {
   const semlio::Scan scan = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
   REQUIRE(scan.size() > 100000);
@@ -251,6 +258,19 @@ TEST_CASE("fit_local_axis equals fit_local_shape's normal and direction on real 
       REQUIRE(valid == shape.valid);
       mismatches += same_bits(axis, end == semlio::EigenEnd::kSmallest ? shape.normal : shape.direction) ? 0U : 1U;
       ++queries;
+    }
+    // A residual's fit (fit_local_shape_axis) over the neighbourhood and over
+    // its first 2..5 points (the sizes of a feature's matches).
+    for (std::size_t size : {n, std::size_t{2}, std::size_t{3}, std::size_t{4}, std::size_t{5}}) {
+      const semlio::LocalShape full = semlio::fit_local_shape(size, point_at);
+      for (const semlio::EigenEnd end : {semlio::EigenEnd::kSmallest, semlio::EigenEnd::kLargest}) {
+        const semlio::LocalAxisShape part = semlio::fit_local_shape_axis(size, point_at, end);
+        REQUIRE(part.valid == full.valid);
+        mismatches += same_bits(part.mean, full.mean) && same_bits(part.eigenvalues, full.eigenvalues) &&
+                              same_bits(part.axis, end == semlio::EigenEnd::kSmallest ? full.normal : full.direction)
+                          ? 0U
+                          : 1U;
+      }
     }
     Eigen::Matrix3d cov;
     Vector3d mean;

@@ -158,51 +158,76 @@ inline SymmetricSplit split_symmetric3(const Eigen::Matrix3d& C) {
   return s;
 }
 
-/// The three eigenpairs of a kGeneral split in ascending order of their
-/// eigenvalues (unscaled), ties in the order (separated, deflated high,
-/// deflated low): step 4 of eigen_symmetric3 and a stable sort.
-inline void ordered_eigenpairs(const SymmetricSplit& s, std::array<double, 3>& values,
-                               std::array<Eigen::Vector3d, 3>& vectors) {
+/// Step 4 of eigen_symmetric3 before the sort: B deflated onto the plane
+/// orthogonal to v_sep (basis u, w) and its 2x2 problem solved -- the three
+/// eigenvalues (unscaled, in the order separated, deflated high, deflated
+/// low) and what the two deflated eigenvectors are made of.
+struct Deflation {
+  std::array<double, 3> values{};
+  Eigen::Vector3d u = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d w = Eigen::Vector3d::UnitY();
+  double c = 1.0;   ///< deflated high vector = (c u + sn w) normalised
+  double sn = 0.0;  ///< deflated low vector = (c w - sn u) normalised
+};
+
+inline Deflation deflate(const SymmetricSplit& s) {
   // Deflate onto the orthogonal plane spanned by (u, w); Jacobi-rotate 2x2.
+  Deflation f;
   const Eigen::Matrix3d& B = s.B;
   const Eigen::Vector3d& v_sep = s.v_sep;
-  const Eigen::Vector3d u = any_orthogonal(v_sep);
-  const Eigen::Vector3d w = v_sep.cross(u).normalized();
-  const Eigen::Vector3d Bu = B * u;
-  const Eigen::Vector3d Bw = B * w;
-  const double a = u.dot(Bu);
-  const double b = 0.5 * (u.dot(Bw) + w.dot(Bu));
-  const double d = w.dot(Bw);
+  f.u = any_orthogonal(v_sep);
+  f.w = v_sep.cross(f.u).normalized();
+  const Eigen::Vector3d Bu = B * f.u;
+  const Eigen::Vector3d Bw = B * f.w;
+  const double a = f.u.dot(Bu);
+  const double b = 0.5 * (f.u.dot(Bw) + f.w.dot(Bu));
+  const double d = f.w.dot(Bw);
   const double mean = 0.5 * (a + d);
   const double e = 0.5 * (a - d);
   const double half = std::sqrt(e * e + b * b);  // B is O(1): no overflow, hypot not needed
   // Eigenvector (c, s) of [[a, b], [b, d]] for mean + half without
   // trigonometry: (e + half, b) when e >= 0, else (b, half - e) -- both exact
   // eigenvectors; the choice avoids cancellation. half == 0: any pair.
-  double c = 1.0;
-  double sn = 0.0;
   if (half > 0.0) {
     const double x = e >= 0.0 ? e + half : b;
     const double y = e >= 0.0 ? b : half - e;
     const double len = std::sqrt(x * x + y * y);
-    c = x / len;
-    sn = y / len;
+    f.c = x / len;
+    f.sn = y / len;
   }
   const double l_sep = s.q + s.p * v_sep.dot(B * v_sep);  // Rayleigh quotient: error ~ eps^2
-  values = {l_sep, s.q + s.p * (mean + half), s.q + s.p * (mean - half)};
-  vectors = {v_sep, (c * u + sn * w).normalized(), (c * w - sn * u).normalized()};
-  // Stable insertion sort of three (swaps only on strictly less).
-  std::array<int, 3> o{0, 1, 2};
+  f.values = {l_sep, s.q + s.p * (mean + half), s.q + s.p * (mean - half)};
+  return f;
+}
+
+/// Positions of Deflation::values in ascending order, ties in the order
+/// (separated, deflated high, deflated low): a stable sort of three.
+inline std::array<int, 3> ascending_order(const std::array<double, 3>& values) {
+  std::array<int, 3> o{0, 1, 2};  // swaps only on strictly less
   if (values[1] < values[0]) std::swap(o[0], o[1]);
   if (values[2] < values[static_cast<std::size_t>(o[1])]) {
     std::swap(o[1], o[2]);
     if (values[static_cast<std::size_t>(o[1])] < values[static_cast<std::size_t>(o[0])]) std::swap(o[0], o[1]);
   }
-  const std::array<double, 3> v0 = values;
-  const std::array<Eigen::Vector3d, 3> e0 = vectors;
+  return o;
+}
+
+/// Eigenvector number `which` (0 separated, 1 deflated high, 2 deflated low).
+inline Eigen::Vector3d deflation_vector(const SymmetricSplit& s, const Deflation& f, int which) {
+  if (which == 0) return s.v_sep;
+  return which == 1 ? (f.c * f.u + f.sn * f.w).normalized() : (f.c * f.w - f.sn * f.u).normalized();
+}
+
+/// The three eigenpairs of a kGeneral split in ascending order of their
+/// eigenvalues (unscaled), ties in the order (separated, deflated high,
+/// deflated low): step 4 of eigen_symmetric3 and a stable sort.
+inline void ordered_eigenpairs(const SymmetricSplit& s, std::array<double, 3>& values,
+                               std::array<Eigen::Vector3d, 3>& vectors) {
+  const Deflation f = deflate(s);
+  const std::array<int, 3> o = ascending_order(f.values);
   for (std::size_t i = 0; i < 3; ++i) {
-    values[i] = v0[static_cast<std::size_t>(o[i])] * s.scale;
-    vectors[i] = e0[static_cast<std::size_t>(o[i])];
+    values[i] = f.values[static_cast<std::size_t>(o[i])] * s.scale;
+    vectors[i] = deflation_vector(s, f, o[i]);
   }
 }
 
@@ -255,6 +280,28 @@ inline Eigen::Vector3d eigenvector_symmetric3(const Eigen::Matrix3d& C, EigenEnd
   std::array<Eigen::Vector3d, 3> vectors;
   detail::ordered_eigenpairs(s, values, vectors);
   return vectors[largest ? 2 : 0];
+}
+
+/// eigen_symmetric3(C)'s eigenvalues and only one of its vectors -- column 0
+/// (EigenEnd::kSmallest) or 2 (kLargest) -- bit for bit, without computing
+/// the others (a residual's line or plane fit reads one; ~10 000 fits a
+/// frame). Writes the ascending eigenvalues into values, returns the vector.
+inline Eigen::Vector3d eigen_symmetric3_end(const Eigen::Matrix3d& C, EigenEnd end, Eigen::Vector3d& values) {
+  using Kind = detail::SymmetricSplit::Kind;
+  const detail::SymmetricSplit s = detail::split_symmetric3(C);
+  const bool largest = end == EigenEnd::kLargest;
+  const Eigen::Vector3d identity_column = largest ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
+  if (s.kind == Kind::kNonFinite) {
+    values.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return identity_column;
+  }
+  values.setZero();
+  if (s.kind == Kind::kScalar) values.setConstant(s.q * s.scale);
+  if (s.kind != Kind::kGeneral) return identity_column;
+  const detail::Deflation f = detail::deflate(s);
+  const std::array<int, 3> o = detail::ascending_order(f.values);
+  for (std::size_t i = 0; i < 3; ++i) values[static_cast<Eigen::Index>(i)] = f.values[static_cast<std::size_t>(o[i])] * s.scale;
+  return detail::deflation_vector(s, f, o[largest ? 2 : 0]);
 }
 
 /// Shape of a point neighbourhood (eq. 3-6): centroid, covariance eigenvalues,
@@ -317,6 +364,32 @@ LocalShape fit_local_shape(std::size_t n, PointAt point_at) {
   shape.eigenvalues = eig.values.cwiseMax(0.0);  // a covariance is PSD; clip rounding
   shape.normal = eig.vectors.col(0);
   shape.direction = eig.vectors.col(2);
+  shape.valid = true;
+  return shape;
+}
+
+/// What a residual's fit needs of eq. 3-6: centroid, eigenvalues and one axis.
+struct LocalAxisShape {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();         ///< centroid (eq. 3)
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();        ///< unit normal (kSmallest) or line direction (kLargest)
+  Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();  ///< of the covariance, ascending [m^2], clipped at 0
+  bool valid = false;  ///< as LocalShape::valid
+};
+
+/// fit_local_shape(n, point_at)'s mean, eigenvalues, validity and its normal
+/// (end = kSmallest) or direction (kLargest), bit for bit, without the other
+/// eigenvectors (eigen_symmetric3_end).
+template <typename PointAt>
+LocalAxisShape fit_local_shape_axis(std::size_t n, PointAt point_at, EigenEnd end) {
+  LocalAxisShape shape;
+  shape.axis = end == EigenEnd::kLargest ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();  // LocalShape's defaults
+  if (n == 0) return shape;
+  Eigen::Matrix3d cov;
+  detail::mean_covariance(n, point_at, shape.mean, cov);
+  if (n < 2 || !cov.allFinite()) return shape;
+  Eigen::Vector3d values;
+  shape.axis = eigen_symmetric3_end(cov, end, values);
+  shape.eigenvalues = values.cwiseMax(0.0);
   shape.valid = true;
   return shape;
 }

@@ -133,14 +133,16 @@ class PointToLine {
   /// The line (unit direction u, point c) of the matches; false when invalid.
   bool line(const MatchedPoints& m, Eigen::Vector3d& u, Eigen::Vector3d& c) const {
     if (m.count < 2) return false;
-    const LocalShape shape = fit_local_shape(static_cast<std::size_t>(m.count),
-                                             [&](std::size_t i) -> const Eigen::Vector3d& { return m.p_map[i]; });
+    // fit_local_shape's direction, eigenvalues and mean, without the other vectors.
+    const LocalAxisShape shape = fit_local_shape_axis(
+        static_cast<std::size_t>(m.count), [&](std::size_t i) -> const Eigen::Vector3d& { return m.p_map[i]; },
+        EigenEnd::kLargest);
     if (!shape.valid) return false;
     const Eigen::Vector3d& l = shape.eigenvalues;
     if (!(l(2) > config_.min_extent_m2)) return false;
     if (!(l(1) <= config_.max_linearity_ratio * l(2))) return false;
     if (!config_.two_point) {
-      u = shape.direction;
+      u = shape.axis;
       c = shape.mean;
       return true;
     }

@@ -86,14 +86,16 @@ class PointToPlane {
   /// The plane (unit normal n, point c) of the matches; false when invalid.
   bool plane(const MatchedPoints& m, Eigen::Vector3d& n, Eigen::Vector3d& c) const {
     if (m.count < 3) return false;
-    const LocalShape shape = fit_local_shape(static_cast<std::size_t>(m.count),
-                                             [&](std::size_t i) -> const Eigen::Vector3d& { return m.p_map[i]; });
+    // fit_local_shape's normal, eigenvalues and mean, without the other vectors.
+    const LocalAxisShape shape = fit_local_shape_axis(
+        static_cast<std::size_t>(m.count), [&](std::size_t i) -> const Eigen::Vector3d& { return m.p_map[i]; },
+        EigenEnd::kSmallest);
     if (!shape.valid) return false;
     const Eigen::Vector3d& l = shape.eigenvalues;
     if (!(l(1) > config_.min_spread_m2 && l(1) >= config_.min_spread_ratio * l(2))) return false;
     if (!(l(0) <= config_.max_planarity_ratio * l(1))) return false;
     if (!config_.three_point) {
-      n = shape.normal;
+      n = shape.axis;
       c = shape.mean;
       return true;
     }
