@@ -276,10 +276,9 @@ inline Eigen::Vector3d eigenvector_symmetric3(const Eigen::Matrix3d& C, EigenEnd
     return largest ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX();
   }
   if (s.sep_is_largest == largest && s.p > detail::kSeparatedMinSpread) return s.v_sep;
-  std::array<double, 3> values;
-  std::array<Eigen::Vector3d, 3> vectors;
-  detail::ordered_eigenpairs(s, values, vectors);
-  return vectors[largest ? 2 : 0];
+  // Else the sorted decomposition decides, but only the one vector is built.
+  const detail::Deflation f = detail::deflate(s);
+  return detail::deflation_vector(s, f, detail::ascending_order(f.values)[largest ? 2 : 0]);
 }
 
 /// eigen_symmetric3(C)'s eigenvalues and only one of its vectors -- column 0
