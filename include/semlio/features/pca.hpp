@@ -166,8 +166,9 @@ struct Deflation {
   std::array<double, 3> values{};
   Eigen::Vector3d u = Eigen::Vector3d::UnitX();
   Eigen::Vector3d w = Eigen::Vector3d::UnitY();
-  double c = 1.0;   ///< deflated high vector = (c u + sn w) normalised
-  double sn = 0.0;  ///< deflated low vector = (c w - sn u) normalised
+  double e = 0.0;     ///< half the difference of the 2x2 problem's diagonal
+  double b = 0.0;     ///< its off-diagonal
+  double half = 0.0;  ///< half the gap between its eigenvalues
 };
 
 inline Deflation deflate(const SymmetricSplit& s) {
@@ -180,23 +181,13 @@ inline Deflation deflate(const SymmetricSplit& s) {
   const Eigen::Vector3d Bu = B * f.u;
   const Eigen::Vector3d Bw = B * f.w;
   const double a = f.u.dot(Bu);
-  const double b = 0.5 * (f.u.dot(Bw) + f.w.dot(Bu));
+  f.b = 0.5 * (f.u.dot(Bw) + f.w.dot(Bu));
   const double d = f.w.dot(Bw);
   const double mean = 0.5 * (a + d);
-  const double e = 0.5 * (a - d);
-  const double half = std::sqrt(e * e + b * b);  // B is O(1): no overflow, hypot not needed
-  // Eigenvector (c, s) of [[a, b], [b, d]] for mean + half without
-  // trigonometry: (e + half, b) when e >= 0, else (b, half - e) -- both exact
-  // eigenvectors; the choice avoids cancellation. half == 0: any pair.
-  if (half > 0.0) {
-    const double x = e >= 0.0 ? e + half : b;
-    const double y = e >= 0.0 ? b : half - e;
-    const double len = std::sqrt(x * x + y * y);
-    f.c = x / len;
-    f.sn = y / len;
-  }
+  f.e = 0.5 * (a - d);
+  f.half = std::sqrt(f.e * f.e + f.b * f.b);  // B is O(1): no overflow, hypot not needed
   const double l_sep = s.q + s.p * v_sep.dot(B * v_sep);  // Rayleigh quotient: error ~ eps^2
-  f.values = {l_sep, s.q + s.p * (mean + half), s.q + s.p * (mean - half)};
+  f.values = {l_sep, s.q + s.p * (mean + f.half), s.q + s.p * (mean - f.half)};
   return f;
 }
 
@@ -212,10 +203,23 @@ inline std::array<int, 3> ascending_order(const std::array<double, 3>& values) {
   return o;
 }
 
-/// Eigenvector number `which` (0 separated, 1 deflated high, 2 deflated low).
+/// Eigenvector number `which` (0 separated, 1 deflated high, 2 deflated low);
+/// the 2x2 rotation is solved only for the deflated ones.
 inline Eigen::Vector3d deflation_vector(const SymmetricSplit& s, const Deflation& f, int which) {
   if (which == 0) return s.v_sep;
-  return which == 1 ? (f.c * f.u + f.sn * f.w).normalized() : (f.c * f.w - f.sn * f.u).normalized();
+  // Eigenvector (c, sn) of the 2x2 problem for its larger eigenvalue without
+  // trigonometry: (e + half, b) when e >= 0, else (b, half - e) -- both exact
+  // eigenvectors; the choice avoids cancellation. half == 0: any pair.
+  double c = 1.0;
+  double sn = 0.0;
+  if (f.half > 0.0) {
+    const double x = f.e >= 0.0 ? f.e + f.half : f.b;
+    const double y = f.e >= 0.0 ? f.b : f.half - f.e;
+    const double len = std::sqrt(x * x + y * y);
+    c = x / len;
+    sn = y / len;
+  }
+  return which == 1 ? (c * f.u + sn * f.w).normalized() : (c * f.w - sn * f.u).normalized();
 }
 
 /// The three eigenpairs of a kGeneral split in ascending order of their
