@@ -152,9 +152,6 @@ class NormalConsistency {
   FeatureMatches match_impl(std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
                             NearestCache* cache) const {
     FeatureMatches m;
-    // The next feature's reads, while this one works: its candidates and
-    // the axes of the first 8 (Algorithm 1 reads ~5-8 of them).
-    if (cache != nullptr) map_->prefetch(*cache, i + 1, 8);
     const Eigen::Vector3f& axis = scan_axes_[i];
     if (axis.isZero()) return m;  // unusable scan axis: every candidate would fail
     const Eigen::Vector3f q = detail::feature_to_map(R, t, (*features_)[i]);

@@ -483,28 +483,6 @@ class FeatureMap {
     return n;
   }
 
-  /// Hints the CPU caches at what a cached query for `slot` reads -- its
-  /// list's map points, and the axes of its first `axes` entries (for an
-  /// associator that reads them) -- so that a caller can issue it one
-  /// feature ahead: the points are scattered over the map, and each read
-  /// would otherwise wait for the cache. Changes no result. (Measured: full
-  /// preset, KITTI raw snippet, 16 alternated rounds on one core: solve
-  /// median 28.58 -> 27.89 ms, frame mean 39.07 -> 37.89 ms.)
-  void prefetch(const NearestCache& cache, std::size_t slot, std::size_t axes = 0) const noexcept {
-#if defined(__GNUC__)
-    if (slot >= cache.slots_ || cache.generation_ != generation_ || !(cache.radius_m_[slot] >= 0.0F)) return;
-    const std::uint32_t* list = cache.lists_.data() + slot * cache.list_len_;
-    const std::size_t count = cache.count_[slot];
-    const std::vector<Eigen::Vector3f>& pts = tree_.points();
-    for (std::size_t j = 0; j < count; ++j) __builtin_prefetch(pts.data() + list[j]);
-    for (std::size_t j = 0; j < std::min(count, axes); ++j) __builtin_prefetch(axes_.data() + list[j]);
-#else
-    (void)cache;
-    (void)slot;
-    (void)axes;
-#endif
-  }
-
   /// Unit axis of map point i (normal or line direction; zero = unusable),
   /// fitted on first use over its shape_neighbours() nearest map points and
   /// cached until the next build(). Allocation-free. Precondition: i < size().
