@@ -28,7 +28,12 @@
 /// associators' axes need): when the end asked for is the separated
 /// eigenvalue of step 3, step 4 and the sort are skipped -- the same vector,
 /// for ~13 % (normals) to ~40 % (line directions) less time on real KITTI
-/// neighbourhoods (bench_features, BM_EigenAxis_KittiNeighbourhoods).
+/// neighbourhoods (bench_features, BM_EigenAxis_KittiNeighbourhoods). A
+/// residual's fit (eigen_symmetric3_end, fit_local_shape_axis) needs all
+/// three eigenvalues but one vector: the deflation runs, and the 2x2
+/// rotation only when that vector is a deflated one. All these forms share
+/// one arithmetic (deflate, ascending_order, deflation_vector), so each
+/// equals eigen_symmetric3 bit for bit.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -303,7 +308,9 @@ inline Eigen::Vector3d eigen_symmetric3_end(const Eigen::Matrix3d& C, EigenEnd e
   if (s.kind != Kind::kGeneral) return identity_column;
   const detail::Deflation f = detail::deflate(s);
   const std::array<int, 3> o = detail::ascending_order(f.values);
-  for (std::size_t i = 0; i < 3; ++i) values[static_cast<Eigen::Index>(i)] = f.values[static_cast<std::size_t>(o[i])] * s.scale;
+  for (std::size_t i = 0; i < 3; ++i) {
+    values[static_cast<Eigen::Index>(i)] = f.values[static_cast<std::size_t>(o[i])] * s.scale;
+  }
   return detail::deflation_vector(s, f, o[largest ? 2 : 0]);
 }
 
@@ -385,7 +392,8 @@ struct LocalAxisShape {
 template <typename PointAt>
 LocalAxisShape fit_local_shape_axis(std::size_t n, PointAt point_at, EigenEnd end) {
   LocalAxisShape shape;
-  shape.axis = end == EigenEnd::kLargest ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();  // LocalShape's defaults
+  // LocalShape's defaults for the axis asked for (direction UnitX, normal UnitZ).
+  shape.axis = end == EigenEnd::kLargest ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
   if (n == 0) return shape;
   Eigen::Matrix3d cov;
   detail::mean_covariance(n, point_at, shape.mean, cov);

@@ -94,10 +94,6 @@ inline double azimuth_0_2pi(const Eigen::Vector3f& p) {
   return a < 0.0 ? a + 2.0 * std::numbers::pi : a;
 }
 
-}  // namespace detail
-
-namespace detail {
-
 /// azimuth_0_2pi(p) in (pi/2, 3pi/2), decided by the sign of x wherever
 /// |x| > 1e-6 |y| (atan2_fast's result then lies at least ~1e-6 rad inside
 /// its half-plane, far beyond its rounding), by the azimuth itself only near
@@ -131,8 +127,9 @@ inline bool wraps_around(const Eigen::Vector3f& p, const Eigen::Vector3f& c) {
 /// Cost: sign tests per point, atan2_fast only where a ring can wrap (the
 /// points that cross the x axis from y < 0) or near the y axis -- the same
 /// decisions as comparing every point's azimuth (detail::in_rear_half,
-/// detail::wraps_around; tests compare with that literal form), for ~1/30
-/// of the atan2 calls on KITTI scans.
+/// detail::wraps_around; tests compare with that literal form). On the
+/// KITTI raw snippet this took the preprocessing stage from 2.28 to 1.17 ms
+/// a frame (README, frame time).
 inline void ring_starts_from_order(const std::vector<Eigen::Vector3f>& pts,
                                    std::vector<std::size_t>& begins) {
   begins.clear();
