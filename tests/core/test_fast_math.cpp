@@ -3,7 +3,11 @@
 
 #include <semlio/core/fast_math.hpp>
 
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -54,6 +58,48 @@ TEST_CASE("atan2_fast special inputs", "[core][fast_math]") {
     CHECK(v > prev);
     prev = v;
   }
+}
+
+// Bit equality, so that a caller may switch between the two freely: random
+// pairs over every octant and scale, the reduction seam, axes, zeros of both
+// signs, NaN and subnormals, each combined with every other in one pair.
+TEST_CASE("atan2_fast_pair equals two atan2_fast calls bit for bit", "[core][fast_math]") {
+  const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+  const auto same = [&](double y0, double x0, double y1, double x1) {
+    const std::array<double, 2> pair = semlio::atan2_fast_pair(y0, x0, y1, x1);
+    return bits(pair[0]) == bits(semlio::atan2_fast(y0, x0)) && bits(pair[1]) == bits(semlio::atan2_fast(y1, x1));
+  };
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> scale_exp(-6.0, 4.0);
+  int mismatches = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const double s0 = std::pow(10.0, scale_exp(rng));
+    const double s1 = std::pow(10.0, scale_exp(rng));
+    // KITTI coordinates are floats: half the pairs come rounded to float.
+    double v[4] = {s0 * u(rng), s0 * u(rng), s1 * u(rng), s1 * u(rng)};
+    if (i % 2 == 0) {
+      for (double& c : v) c = static_cast<float>(c);
+    }
+    if (!same(v[0], v[1], v[2], v[3])) ++mismatches;
+  }
+  CHECK(mismatches == 0);
+  const double t8 = std::tan(std::numbers::pi / 8.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double tiny = std::numeric_limits<double>::denorm_min();
+  std::vector<double> special = {0.0, -0.0, 1.0, -1.0, t8, -t8, std::nextafter(t8, 2.0), std::nextafter(t8, 0.0),
+                                 tiny, -tiny, 1e-300, 3.5e38, nan};
+  std::vector<std::array<double, 2>> inputs;
+  for (const double y : special) {
+    for (const double x : special) inputs.push_back({y, x});
+  }
+  for (const auto& a : inputs) {
+    for (const auto& b : inputs) {
+      if (!same(a[0], a[1], b[0], b[1])) ++mismatches;
+    }
+  }
+  CHECK(mismatches == 0);
+  CHECK(inputs.size() == 169);
 }
 
 }  // namespace test_fast_math

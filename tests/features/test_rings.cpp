@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
+#include <string>
 #include <random>
 #include <vector>
 
@@ -368,6 +370,52 @@ TEST_CASE("KITTI vertical-angle correction rotates by 0.205 deg about the horizo
   semlio::correct_kitti_vertical_angle(scan);
   CHECK(scan.points[0].z() == Approx(10.0 * std::sin(theta)));
   CHECK(scan.points[0].y() == 0.0F);
+}
+
+// The scan-wide correction runs two points at a time where SSE2 allows; it
+// must equal the per-point form bit for bit: on both real KITTI scans (odd
+// and even lengths) and on points on and next to the z axis, with signed
+// zeros, NaN, huge and subnormal coordinates, in every pairing.
+TEST_CASE("the scan-wide vertical correction equals the per-point form bit for bit", "[features]") {
+  const double theta = semlio::kKittiVerticalCorrectionRad;
+  const auto same_bits = [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    return std::memcmp(a.data(), b.data(), sizeof(float) * 3) == 0;
+  };
+  const auto check_scan = [&](const std::vector<Eigen::Vector3f>& pts) {
+    semlio::Scan scan;
+    scan.points = pts;
+    semlio::correct_kitti_vertical_angle(scan, theta);
+    std::size_t mismatches = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (!same_bits(scan.points[i], semlio::correct_vertical_angle(pts[i], theta))) ++mismatches;
+    }
+    return mismatches;
+  };
+  for (const char* name : {"000000.bin", "000001.bin"}) {
+    const semlio::Scan real =
+        semlio::io::read_kitti_bin(semlio_test::data_path(std::string("kitti/sequences/00/velodyne/") + name));
+    REQUIRE(real.size() > 100000);
+    CHECK(check_scan(real.points) == 0);
+    std::vector<Eigen::Vector3f> odd(real.points.begin() + 1, real.points.end());
+    if (odd.size() % 2 == 0) odd.pop_back();
+    CHECK(check_scan(odd) == 0);
+  }
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float tiny = std::numeric_limits<float>::denorm_min();
+  const float big = std::numeric_limits<float>::max();
+  const std::vector<Eigen::Vector3f> special = {
+      {0.0F, 0.0F, 5.0F},  {-0.0F, 0.0F, -3.0F}, {0.0F, -0.0F, 0.0F}, {tiny, 0.0F, 1.0F}, {0.0F, -tiny, 2.0F},
+      {1e-20F, 1e-20F, 7.0F}, {nan, 1.0F, 1.0F}, {1.0F, nan, 1.0F}, {1.0F, 1.0F, nan}, {big, big, big},
+      {-big, 3.0F, -big}, {12.5F, -7.25F, -1.75F}, {-40.0F, 0.0F, 2.0F}};
+  std::vector<Eigen::Vector3f> pairs;
+  for (const auto& a : special) {
+    for (const auto& b : special) {
+      pairs.push_back(a);
+      pairs.push_back(b);
+    }
+  }
+  CHECK(pairs.size() == 2 * special.size() * special.size());
+  CHECK(check_scan(pairs) == 0);
 }
 
 }  // namespace test_rings
