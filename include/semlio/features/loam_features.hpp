@@ -311,6 +311,8 @@ class LoamFeatureExtractor {
     reserve_discarding(ring_c_, n);
     reserve_discarding(ring_rej_, n);
     reserve_discarding(picked_, n);
+    reserve_discarding(sector_, n);
+    reserve_discarding(surface_idx_, n);  // every sector's surfaces together: at most n
   }
 
   /// Eq. 2, rejection and selection on the ring order_[b, e). The ring's
@@ -377,12 +379,16 @@ class LoamFeatureExtractor {
       // never be taken) are visited sharpest first, ties by position. A heap
       // hands them out in that order for O(n + visited log n) instead of
       // sorting all of them: the cap is usually reached long before the end.
-      sector_.clear();
+      // Branch-free filters (write always, advance on the condition): about
+      // one point in ten is a corner candidate, a branch on it mispredicts.
+      sector_.resize(ep - sp);  // reserved: no allocation
+      std::size_t candidates = 0;
       for (std::size_t k = sp; k < ep; ++k) {
-        if (static_cast<double>(ring_c_[k]) > corner_threshold && ring_rej_[k] == 0) {
-          sector_.push_back(static_cast<std::uint32_t>(k));
-        }
+        sector_[candidates] = static_cast<std::uint32_t>(k);
+        candidates += static_cast<std::size_t>(static_cast<double>(ring_c_[k]) > corner_threshold) &
+                      static_cast<std::size_t>(ring_rej_[k] == 0);
       }
+      sector_.resize(candidates);
       const auto after = [&](std::uint32_t x, std::uint32_t y) {  // y comes before x
         const float cx = ring_c_[x];
         const float cy = ring_c_[y];
@@ -401,11 +407,17 @@ class LoamFeatureExtractor {
         for (std::size_t j = 1; j <= h && k + j < m && adjacent(k + j - 1); ++j) picked_[k + j] = 1;
         for (std::size_t j = 1; j <= h && j <= k && adjacent(k - j); ++j) picked_[k - j] = 1;
       }
+      const std::size_t first_surface = surface_idx_.size();
+      surface_idx_.resize(first_surface + (ep - sp));  // reserved: no allocation
+      std::size_t surfaces = first_surface;
       for (std::size_t k = sp; k < ep; ++k) {
-        if (picked_[k] != 0 || ring_rej_[k] != 0) continue;
         const float c = ring_c_[k];
-        if (c >= 0.0F && static_cast<double>(c) < surface_threshold) surface_idx_.push_back(order_[b + k]);
+        surface_idx_[surfaces] = order_[b + k];
+        surfaces += static_cast<std::size_t>(picked_[k] == 0) & static_cast<std::size_t>(ring_rej_[k] == 0) &
+                    static_cast<std::size_t>(c >= 0.0F) &
+                    static_cast<std::size_t>(static_cast<double>(c) < surface_threshold);
       }
+      surface_idx_.resize(surfaces);
     }
     // Scatter back, counting the rejections (branch-free: occluded wins).
     std::size_t occluded = 0;
