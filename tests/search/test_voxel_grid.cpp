@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <random>
 #include <set>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -190,6 +192,92 @@ TEST_CASE("voxel_key equals the floor-and-clamp formula, on cell edges and far p
         }
       }
       REQUIRE(semlio::voxel_key(p, inv_leaf) == literal(p, inv_leaf));
+    }
+  }
+}
+
+// The literal downsampling: one map entry per voxel key, sums in input
+// order, majority label (lowest id on ties), outputs by ascending first index.
+struct LiteralVoxels {
+  std::vector<Vector3f> pts;
+  std::vector<Class> labels;
+  std::vector<std::uint32_t> first;
+};
+LiteralVoxels literal_downsample(const std::vector<Vector3f>& pts, const std::vector<Class>& labels,
+                                 const std::vector<std::uint32_t>& subset, double leaf) {
+  struct Acc {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    std::uint32_t count = 0;
+    std::uint32_t first = std::numeric_limits<std::uint32_t>::max();
+    std::map<int, int> votes;
+  };
+  std::map<std::uint64_t, Acc> cells;
+  for (const std::uint32_t i : subset) {
+    if (!pts[i].allFinite()) continue;
+    Acc& a = cells[semlio::voxel_key(pts[i], 1.0 / leaf)];
+    a.sum = a.count == 0 ? pts[i].cast<double>() : Eigen::Vector3d(a.sum + pts[i].cast<double>());
+    ++a.count;
+    a.first = std::min(a.first, i);
+    if (!labels.empty()) ++a.votes[static_cast<int>(labels[i])];
+  }
+  std::vector<const Acc*> order;
+  for (const auto& [key, a] : cells) order.push_back(&a);
+  std::sort(order.begin(), order.end(), [](const Acc* a, const Acc* b) { return a->first < b->first; });
+  LiteralVoxels out;
+  for (const Acc* a : order) {
+    out.pts.push_back(a->count > 1 ? Vector3f((a->sum / static_cast<double>(a->count)).cast<float>())
+                                   : pts[a->first]);
+    out.first.push_back(a->first);
+    if (!labels.empty()) {
+      int best = -1;
+      int votes = 0;
+      for (const auto& [c, v] : a->votes) {
+        if (v > votes) {
+          best = c;
+          votes = v;
+        }
+      }
+      out.labels.push_back(static_cast<Class>(best));
+    }
+  }
+  return out;
+}
+
+TEST_CASE("VoxelGrid equals the literal downsampling bit for bit, in ring order, shuffled and on subsets",
+          "[search]") {
+  // Ring order (a real scan as stored) puts runs of points in one voxel, the
+  // case the last-voxel shortcut serves; shuffled input has almost no runs.
+  for (const char* name : {"000000.bin", "000001.bin"}) {
+    const semlio::Scan scan =
+        semlio::io::read_kitti_bin(semlio_test::data_path(std::string("kitti/sequences/00/velodyne/") + name));
+    std::vector<Class> labels(scan.size());
+    for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<Class>((i * 7 + i / 13) % 5);
+    std::vector<std::uint32_t> all(scan.size());
+    for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+    std::vector<std::uint32_t> shuffled = all;
+    std::shuffle(shuffled.begin(), shuffled.end(), std::mt19937(5));
+    std::vector<std::uint32_t> every_third;
+    for (std::uint32_t i = 0; i < all.size(); i += 3) every_third.push_back(i);
+    semlio::VoxelGrid grid({.leaf_size_m = 0.4});
+    for (const auto* subset : {&all, &shuffled, &every_third}) {
+      for (const bool labelled : {false, true}) {
+        const std::vector<Class> no_labels;
+        const std::vector<Class>& l = labelled ? labels : no_labels;
+        const LiteralVoxels want = literal_downsample(scan.points, l, *subset, 0.4);
+        std::vector<Vector3f> got;
+        std::vector<Class> got_labels;
+        std::vector<std::uint32_t> got_first;
+        grid.downsample(scan.points, l, *subset, got, got_labels, got_first);
+        REQUIRE(got.size() > 5000);
+        CHECK(got_first == want.first);
+        CHECK(got_labels == want.labels);
+        std::size_t differing = 0;
+        for (std::size_t k = 0; k < got.size() && k < want.pts.size(); ++k) {
+          if (std::memcmp(got[k].data(), want.pts[k].data(), sizeof(float) * 3) != 0) ++differing;
+        }
+        CHECK(got.size() == want.pts.size());
+        CHECK(differing == 0);
+      }
     }
   }
 }
