@@ -14,15 +14,24 @@
 
 namespace test_fast_math {  // one namespace per test file: the area compiles as one TU
 
-TEST_CASE("atan2_fast stays within 5e-9 rad of std::atan2 over every octant", "[core][fast_math]") {
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::uniform_real_distribution<double> scale_exp(-6.0, 4.0);
-  double worst = 0.0;
-  for (int i = 0; i < 200000; ++i) {
+// Random (y, x) over every octant at scales 1e-6 .. 1e4.
+struct RandomPoint {
+  explicit RandomPoint(unsigned seed) : rng(seed) {}
+  std::array<double, 2> operator()() {
     const double s = std::pow(10.0, scale_exp(rng));
     const double y = s * u(rng);
-    const double x = s * u(rng);
+    return {y, s * u(rng)};
+  }
+  std::mt19937 rng;
+  std::uniform_real_distribution<double> u{-1.0, 1.0};
+  std::uniform_real_distribution<double> scale_exp{-6.0, 4.0};
+};
+
+TEST_CASE("atan2_fast stays within 5e-9 rad of std::atan2 over every octant", "[core][fast_math]") {
+  RandomPoint random_point(7);
+  double worst = 0.0;
+  for (int i = 0; i < 200000; ++i) {
+    const auto [y, x] = random_point();
     worst = std::max(worst, std::abs(semlio::atan2_fast(y, x) - std::atan2(y, x)));
   }
   CHECK(worst < 5e-9);
@@ -69,15 +78,13 @@ TEST_CASE("atan2_fast_pair equals two atan2_fast calls bit for bit", "[core][fas
     const std::array<double, 2> pair = semlio::atan2_fast_pair(y0, x0, y1, x1);
     return bits(pair[0]) == bits(semlio::atan2_fast(y0, x0)) && bits(pair[1]) == bits(semlio::atan2_fast(y1, x1));
   };
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::uniform_real_distribution<double> scale_exp(-6.0, 4.0);
+  RandomPoint random_point(11);
   int mismatches = 0;
   for (int i = 0; i < 200000; ++i) {
-    const double s0 = std::pow(10.0, scale_exp(rng));
-    const double s1 = std::pow(10.0, scale_exp(rng));
+    const auto [y0, x0] = random_point();
+    const auto [y1, x1] = random_point();
     // KITTI coordinates are floats: half the pairs come rounded to float.
-    double v[4] = {s0 * u(rng), s0 * u(rng), s1 * u(rng), s1 * u(rng)};
+    double v[4] = {y0, x0, y1, x1};
     if (i % 2 == 0) {
       for (double& c : v) c = static_cast<float>(c);
     }

@@ -47,6 +47,7 @@
 #include <semlio/core/buffers.hpp>
 #include <semlio/core/error.hpp>
 #include <semlio/core/labels.hpp>
+#include <semlio/core/radix_sort.hpp>
 #include <semlio/lie/se3.hpp>
 #include <semlio/map/feature_map.hpp>
 
@@ -142,39 +143,9 @@ struct MapEntry {
   Class label;
 };
 
-/// Digit histograms of radix_sort_by_key (6 passes of 2048 buckets, 96 KiB),
-/// kept by callers that sort repeatedly so that a sort allocates nothing.
-struct RadixCounts {
-  static constexpr int kDigit = 11;                                ///< bits per digit
-  static constexpr int kPasses = 6;                                ///< 66 >= 63 key bits
-  static constexpr std::size_t kBuckets = std::size_t{1} << kDigit;  ///< buckets per digit
-  std::vector<std::size_t> count;                                  ///< kPasses * kBuckets, sized on first use
-};
-
-/// Stable LSD radix sort of entries by key (11-bit digits; a digit equal in
-/// every key costs one histogram and no pass). The result is in `entries`.
-/// Allocation-free once `scratch` and `counts` have grown.
-inline void radix_sort_by_key(std::vector<MapEntry>& entries, std::vector<MapEntry>& scratch, RadixCounts& counts) {
-  constexpr int kDigit = RadixCounts::kDigit;
-  constexpr int kPasses = RadixCounts::kPasses;
-  constexpr std::size_t kBuckets = RadixCounts::kBuckets;
-  const std::size_t n = entries.size();
-  if (n < 2) return;
-  counts.count.assign(kPasses * kBuckets, 0);
-  const auto histogram = [&counts](int d) { return counts.count.data() + static_cast<std::size_t>(d) * kBuckets; };
-  for (const MapEntry& e : entries) {
-    for (int d = 0; d < kPasses; ++d) ++histogram(d)[(e.key >> (d * kDigit)) & (kBuckets - 1)];
-  }
-  scratch.resize(n);
-  for (int d = 0; d < kPasses; ++d) {
-    std::size_t* offset = histogram(d);
-    if (std::find(offset, offset + kBuckets, n) != offset + kBuckets) continue;  // one bucket holds all
-    std::size_t sum = 0;
-    for (std::size_t b = 0; b < kBuckets; ++b) sum += std::exchange(offset[b], sum);
-    const int shift = d * kDigit;
-    for (const MapEntry& e : entries) scratch[offset[(e.key >> shift) & (kBuckets - 1)]++] = e;
-    entries.swap(scratch);
-  }
+/// Stable radix sort of entries by voxel key (63 bits: core/radix_sort.hpp).
+inline void sort_by_voxel_key(std::vector<MapEntry>& entries, std::vector<MapEntry>& scratch, RadixCounts& counts) {
+  radix_sort_by_key(entries, scratch, counts, 63, [](const MapEntry& e) { return e.key; });
 }
 
 /// Appends the key-sorted `fresh` to the key-sorted `entries` and merges
@@ -273,7 +244,7 @@ inline void downsample_labelled(const std::vector<Eigen::Vector3f>& points, cons
     if (!reference_voxel_key(points[i], inv_leaf, key)) continue;
     ws.entries.push_back(MapEntry{key, 0, points[i], labels.empty() ? Class::kUnlabeled : labels[i]});
   }
-  radix_sort_by_key(ws.entries, ws.scratch, ws.counts);
+  sort_by_voxel_key(ws.entries, ws.scratch, ws.counts);
   emit_voxels(ws.entries, out_points, out_labels);
 }
 
@@ -466,7 +437,7 @@ class LocalMap {
     std::vector<detail::MapEntry> scratch;        // a full rebuild's sort buffer (map-sized, freed after)
     std::vector<detail::MapEntry> fresh;
     std::vector<detail::MapEntry> fresh_scratch;  // the newcomers' sort buffer (kept)
-    detail::RadixCounts counts;
+    RadixCounts counts;
     std::vector<Eigen::Vector3f> points;          // the voxels handed to the FeatureMap (kept)
     std::vector<Class> labels;
     VoxelIndex voxels;
@@ -514,7 +485,7 @@ class LocalMap {
       for (const std::size_t k : active_pos_) {
         if (!held(keyframes_[k].id)) append(keyframes_[k], m.fresh);
       }
-      detail::radix_sort_by_key(m.fresh, m.fresh_scratch, m.counts);
+      detail::sort_by_voxel_key(m.fresh, m.fresh_scratch, m.counts);
       // Growing a map-sized vector copies it into fresh pages; while the map
       // grows that happened on 176 of 428 builds of the main job's drive and
       // cost ~5 ms each (page faults, the copy). An eighth of headroom leaves
@@ -526,7 +497,7 @@ class LocalMap {
     } else {
       m.entries.clear();
       for (const std::size_t k : active_pos_) append(keyframes_[k], m.entries);
-      detail::radix_sort_by_key(m.entries, m.scratch, m.counts);
+      detail::sort_by_voxel_key(m.entries, m.scratch, m.counts);
       std::vector<detail::MapEntry>().swap(m.scratch);  // map-sized, and only a full rebuild needs it
     }
     reserve_with_headroom(m.ids, active_.size());
