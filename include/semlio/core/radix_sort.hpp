@@ -15,8 +15,8 @@
 
 namespace semlio {
 
-/// Digit histograms of radix_sort_by_key (2048 buckets a digit: 96 KiB for
-/// 63-bit keys), kept by callers that sort repeatedly so that a sort
+/// Digit histograms of radix_sort_by_key (2048 buckets a digit; 96 KiB,
+/// room for 64-bit keys), kept by callers that sort repeatedly so that a sort
 /// allocates nothing.
 struct RadixCounts {
   static constexpr int kDigit = 11;                                  ///< bits per digit
@@ -35,6 +35,10 @@ void radix_sort_by_key(std::vector<T>& items, std::vector<T>& scratch, RadixCoun
   const std::size_t n = items.size();
   if (n < 2) return;
   const int passes = (std::clamp(key_bits, 1, 64) + kDigit - 1) / kDigit;
+  // Room for the widest keys at once: a later call with wider keys (a scan
+  // with more points) then allocates nothing either.
+  constexpr std::size_t kMostPasses = (64 + kDigit - 1) / kDigit;
+  counts.count.reserve(kMostPasses * kBuckets);
   counts.count.assign(static_cast<std::size_t>(passes) * kBuckets, 0);
   const auto histogram = [&counts](int d) { return counts.count.data() + static_cast<std::size_t>(d) * kBuckets; };
   for (const T& item : items) {
