@@ -520,6 +520,39 @@ TEST_CASE("FeatureMap::nearest with a NearestCache equals a k-d tree k-NN cut at
   }
 }
 
+TEST_CASE("NearestCache::bind_queries empties the slots for a new query set only", "[map]") {
+  // A slot filled for one scan's feature answers the same point again from its
+  // list; once the cache is bound to another scan's features it refills first,
+  // and the answer is the k-d tree's either way.
+  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.4);
+  semlio::FeatureMap map(semlio::FeatureKind::kPlane);
+  map.build(cloud.points, {}, 10, 32);
+  const semlio::KdTree3f reference(map.points());
+  semlio::NearestCache cache;
+  cache.reset(1, 20);
+  const Eigen::Vector3f q = cloud.points[cloud.points.size() / 2] + Eigen::Vector3f(0.05F, -0.03F, 0.02F);
+  std::array<std::uint32_t, 64> idx{};
+  std::array<float, 64> d2{};
+  std::array<std::uint32_t, 64> ref_idx{};
+  std::array<float, 64> ref_d2{};
+  const std::size_t nr = reference.knn(q, 15, ref_idx.data(), ref_d2.data());
+  const auto answer_is_reference = [&](std::size_t n) {
+    bool same = n == nr;
+    for (std::size_t j = 0; same && j < n; ++j) same = idx[j] == ref_idx[j] && d2[j] == ref_d2[j];
+    return same;
+  };
+  const double gate2 = 1e6;  // every candidate inside
+  cache.bind_queries(7);
+  CHECK(answer_is_reference(map.nearest(q, 15, gate2, idx.data(), d2.data(), cache, 0)));
+  CHECK((cache.hits() == 0 && cache.refills() == 1));
+  cache.bind_queries(7);  // the same scan again: the slot stays
+  CHECK(answer_is_reference(map.nearest(q, 15, gate2, idx.data(), d2.data(), cache, 0)));
+  CHECK((cache.hits() == 1 && cache.refills() == 1));
+  cache.bind_queries(8);  // another scan: its feature 0 is refilled, even at the same point
+  CHECK(answer_is_reference(map.nearest(q, 15, gate2, idx.data(), d2.data(), cache, 0)));
+  CHECK((cache.hits() == 1 && cache.refills() == 2));
+}
+
 TEST_CASE("FeatureMap's lazy axes and candidate lists equal an eager fit", "[map]") {
   // Axes and lists are computed on first use; whatever the access order
   // (axis first, list first via nearest(), or all at once), every axis must

@@ -42,7 +42,10 @@ class NearestK {
   /// Binds the map to search (non-owning).
   void set_map(const FeatureMap& map) { map_ = &map; }
   /// Binds the frame's feature positions (scan frame, non-owning); nothing to precompute.
-  void set_scan(const std::vector<Eigen::Vector3f>& points_scan) { features_ = &points_scan; }
+  void set_scan(const std::vector<Eigen::Vector3f>& points_scan) {
+    features_ = &points_scan;
+    scan_id_ = detail::next_query_set_id();
+  }
 
   /// Matches of one query point already in the map frame.
   [[nodiscard]] FeatureMatches match(const Eigen::Vector3f& q_map) const {
@@ -71,6 +74,7 @@ class NearestK {
     const std::size_t n = features_ == nullptr ? 0 : features_->size();
     const std::size_t len = cache_list_len();
     if (cache.slots() < n || cache.list_len() != len) cache.reset(std::max(n, cache.slots()), len);
+    cache.bind_queries(scan_id_);  // another scan's lists: refill at once rather than test them first
     const auto k = static_cast<std::size_t>(config_.k);
     // nearest() returns the k-NN cut at the gate, as match() computes it.
     const double gate2 = config_.max_distance_m * config_.max_distance_m;
@@ -109,6 +113,7 @@ class NearestK {
   Config config_;
   const FeatureMap* map_ = nullptr;
   const std::vector<Eigen::Vector3f>* features_ = nullptr;
+  std::uint64_t scan_id_ = 0;  // detail::next_query_set_id() of the bound scan (NearestCache::bind_queries)
 };
 
 static_assert(Associator<NearestK, FeatureMap>);

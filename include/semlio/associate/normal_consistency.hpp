@@ -95,6 +95,7 @@ class NormalConsistency {
   /// Allocation-free once its buffers have grown (SmallKdTree3f).
   void set_scan(const std::vector<Eigen::Vector3f>& points_scan) {
     features_ = &points_scan;
+    scan_id_ = detail::next_query_set_id();
     scan_tree_.build(points_scan);
     compute_scan_axes();
   }
@@ -118,6 +119,7 @@ class NormalConsistency {
     const std::size_t n = features_ == nullptr ? 0 : features_->size();
     const std::size_t len = cache_list_len();
     if (cache.slots() < n || cache.list_len() != len) cache.reset(std::max(n, cache.slots()), len);
+    cache.bind_queries(scan_id_);  // another scan's lists: refill at once rather than test them first
     associate_impl(T_map_scan, out, &cache);
   }
 
@@ -190,6 +192,7 @@ class NormalConsistency {
   SmallKdTree3f scan_tree_;  // rebuilt per frame without allocating; equal results to KdTree3f
   std::vector<Eigen::Vector3f> scan_axes_;
   FeatureKind axes_kind_ = FeatureKind::kPlane;
+  std::uint64_t scan_id_ = 0;  // detail::next_query_set_id() of the bound scan (NearestCache::bind_queries)
 };
 
 static_assert(Associator<NormalConsistency, FeatureMap>);

@@ -229,6 +229,13 @@ inline std::uint64_t next_map_build_id() {
   return counter.fetch_add(1, std::memory_order_relaxed) + 1;
 }
 
+/// A process-wide unique id for each set of queries a NearestCache serves
+/// (an associator's bound scan; never 0): NearestCache::bind_queries.
+inline std::uint64_t next_query_set_id() {
+  static std::atomic<std::uint64_t> counter{0};
+  return counter.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
 }  // namespace detail
 
 /// Per-feature candidate lists reused across repeated nearest() queries of
@@ -248,8 +255,19 @@ class NearestCache {
     lists_.resize(slots * list_len_);
     list_dist_m_.resize(slots * list_len_);
     generation_ = 0;
+    queries_ = 0;
     hits_ = 0;
     refills_ = 0;
+  }
+  /// Says that the slots now stand for the queries of `query_set` (e.g.
+  /// detail::next_query_set_id() of a newly bound scan). When that differs
+  /// from the last call, every slot is emptied: a list filled for another
+  /// scan's feature i is still exact for this one's, but lies elsewhere, so
+  /// its test would nearly always fail after a scan of up to its L entries.
+  void bind_queries(std::uint64_t query_set) {
+    if (query_set == queries_) return;
+    std::fill(radius_m_.begin(), radius_m_.end(), -1.0F);
+    queries_ = query_set;
   }
   /// Empties every slot (keeps the sizes).
   void clear() { reset(slots_, list_len_); }
@@ -272,6 +290,7 @@ class NearestCache {
   std::vector<std::uint32_t> lists_;      // list_len_ map indices per slot, (distance, index) order at q0
   std::vector<float> list_dist_m_;        // their distances from q0 [m] (ascending): early exit of a hit
   std::uint64_t generation_ = 0;          // FeatureMap build id the lists refer to (0: none)
+  std::uint64_t queries_ = 0;             // bind_queries() id the slots stand for (0: none)
   std::size_t hits_ = 0;
   std::size_t refills_ = 0;
 };
