@@ -19,6 +19,7 @@
 #include <semlio/core/error.hpp>
 #include <semlio/map/feature_map.hpp>
 #include <semlio/map/local_map.hpp>
+#include <semlio/search/small_kdtree.hpp>
 #include <semlio_test/associate_scenes.hpp>
 #include <semlio_test/frontend_sim_pair.hpp>
 
@@ -165,6 +166,40 @@ TEST_CASE("NormalConsistency equals the literal Algorithm 1 on the real KITTI pa
   const std::vector<SE3d> poses{SE3d(), guess, perturbed(guess, 0.2, 0.01)};
   require_fast_equals_reference(local.surfaces(), query.surfaces.points, poses, true);
   require_fast_equals_reference(local.corners(), query.corners.points, poses, true);
+}
+
+TEST_CASE("NormalConsistency's scan axes equal a plain k-NN fit per feature", "[associate]") {
+  // set_scan() bounds each feature's k-NN search by the previous feature's
+  // neighbours (leaf order); every axis must still be the unbounded search's
+  // fit, bit for bit, for both kinds and several neighbourhood sizes.
+  const auto query = semlio_test::kitti_features("kitti/sequences/00/velodyne/000001.bin");
+  semlio::LocalMap local;
+  semlio_test::build_kitti_pair_map(local);
+  for (const FeatureMap* map : {&local.surfaces(), &local.corners()}) {
+    const std::vector<Eigen::Vector3f>& points =
+        map->kind() == FeatureKind::kPlane ? query.surfaces.points : query.corners.points;
+    REQUIRE(points.size() > 500);
+    semlio::SmallKdTree3f tree;
+    tree.build(points);
+    for (const int k : {3, 10, 17}) {
+      semlio::NormalConsistencyConfig config;
+      config.scan_neighbours = k;
+      semlio::NormalConsistency fast(config);
+      fast.set_map(*map);
+      fast.set_scan(points);
+      REQUIRE(fast.scan_axes().size() == points.size());
+      std::size_t differ = 0;
+      std::size_t usable = 0;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const Eigen::Vector3f expected = semlio::detail::neighbourhood_axis(tree, map->kind(), points[i], k);
+        differ += fast.scan_axes()[i] == expected ? 0U : 1U;
+        usable += expected.isZero() ? 0U : 1U;
+      }
+      INFO("kind " << static_cast<int>(map->kind()) << " k " << k);
+      CHECK(differ == 0);
+      CHECK(usable > points.size() / 2);
+    }
+  }
 }
 
 TEST_CASE("NormalConsistency equals the literal Algorithm 1 on a dense real map", "[associate]") {
