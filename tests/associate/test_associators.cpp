@@ -475,7 +475,8 @@ TEST_CASE("Associators return no match when the map cannot support a primitive",
     map.build(scan, {}, 10);
     semlio::NormalConsistency nc;
     nc.set_map(map);
-    nc.set_scan({});
+    const std::vector<Eigen::Vector3f> none;
+    nc.set_scan(none);
     nc.associate(SE3d(), out);
     CHECK(out.empty());
   }

@@ -553,6 +553,42 @@ TEST_CASE("NearestCache::bind_queries empties the slots for a new query set only
   CHECK((cache.hits() == 1 && cache.refills() == 2));
 }
 
+TEST_CASE("FeatureMap::axis with a hint equals the plain fit", "[map]") {
+  // The hint (the last fitted neighbourhood) bounds the next search: near
+  // the last point (a feature's candidates), far from it (the next feature
+  // across the scan) or with no hint yet, the axis must be the plain fit,
+  // bit for bit, for several neighbourhood sizes and both kinds.
+  const auto cloud = semlio_test::kitti_cloud("kitti/sequences/00/velodyne/000000.bin", 0.4);
+  std::mt19937 rng(5);
+  for (const semlio::FeatureKind kind : {semlio::FeatureKind::kPlane, semlio::FeatureKind::kLine}) {
+    for (const int k : {3, 10, 25}) {
+      semlio::FeatureMap map(kind);
+      map.build(cloud.points, {}, k, 32);
+      REQUIRE(map.size() > 1000);
+      std::uniform_int_distribution<std::size_t> pick(0, map.size() - 1);
+      semlio::FeatureMap::AxisHint hint;
+      std::size_t mismatches = 0;
+      std::size_t checked = 0;
+      for (int feature = 0; feature < 300; ++feature) {
+        // A random map point, then its 15 nearest, as Algorithm 1 reads them.
+        std::array<std::uint32_t, 64> idx{};
+        std::array<float, 64> d2{};
+        const std::size_t n = map.tree().knn(map.points()[pick(rng)], 15, idx.data(), d2.data());
+        for (std::size_t j = 0; j < n; ++j) {
+          const Eigen::Vector3f expected =
+              semlio::detail::neighbourhood_axis(map.tree(), kind, map.points()[idx[j]], k);
+          mismatches += map.axis(idx[j], hint) == expected ? 0U : 1U;
+          ++checked;
+        }
+      }
+      INFO("kind " << static_cast<int>(kind) << " k " << k);
+      CHECK(checked == 300U * 15U);
+      CHECK(mismatches == 0);
+      CHECK(map.fitted_axes() > 1000);  // most were fitted through the hint, not read back
+    }
+  }
+}
+
 TEST_CASE("FeatureMap's lazy axes and candidate lists equal an eager fit", "[map]") {
   // Axes and lists are computed on first use; whatever the access order
   // (axis first, list first via nearest(), or all at once), every axis must

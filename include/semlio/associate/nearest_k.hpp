@@ -46,6 +46,8 @@ class NearestK {
     features_ = &points_scan;
     scan_id_ = detail::next_query_set_id();
   }
+  /// Not from a temporary: only a pointer to the features is kept.
+  void set_scan(std::vector<Eigen::Vector3f>&&) = delete;
 
   /// Matches of one query point already in the map frame.
   [[nodiscard]] FeatureMatches match(const Eigen::Vector3f& q_map) const {

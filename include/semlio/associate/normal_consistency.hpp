@@ -9,9 +9,12 @@
 /// for surfaces, line directions for corners, eq. 3-6 over 10 points).
 ///
 /// Why it is fast yet equal to the literal NormalConsistencyReference:
-///  - map axes are cached per map point, fitted on first use (FeatureMap);
+///  - map axes are cached per map point, fitted on first use (FeatureMap),
+///    each search bounded by the previous fit's neighbourhood (a feature's
+///    candidates lie together: FeatureMap::axis(i, hint));
 ///  - scan axes are computed once per frame in set_scan(), not per candidate
-///    nor per Gauss-Newton iteration; per feature only a rotation R * n1;
+///    nor per Gauss-Newton iteration (in leaf order, each search bounded by
+///    the previous feature's neighbours); per feature only a rotation R * n1;
 ///  - the 15 candidates come from FeatureMap::nearest(): an anchor (the map
 ///    point of the query's voxel by a binary search, else the 1-NN) plus the
 ///    anchor's cached candidate list, exact by a triangle-inequality bound
@@ -100,11 +103,14 @@ class NormalConsistency {
     scan_tree_.build(points_scan);
     compute_scan_axes();
   }
+  /// Not from a temporary: only a pointer to the features is kept.
+  void set_scan(std::vector<Eigen::Vector3f>&&) = delete;
 
   /// Matches of feature i at pose (R, t) = T_map_scan. Precondition: a
   /// non-empty map and features are bound, i < features.size().
   [[nodiscard]] FeatureMatches match(std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) const {
-    return match_impl(i, R, t, nullptr);
+    FeatureMap::AxisHint hint;
+    return match_impl(i, R, t, nullptr, hint);
   }
 
   /// One FeatureMatches per bound feature at pose T_map_scan into out.
@@ -165,7 +171,7 @@ class NormalConsistency {
   }
 
   FeatureMatches match_impl(std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t,
-                            NearestCache* cache) const {
+                            NearestCache* cache, FeatureMap::AxisHint& hint) const {
     FeatureMatches m;
     const Eigen::Vector3f& axis = scan_axes_[i];
     if (axis.isZero()) return m;  // unusable scan axis: every candidate would fail
@@ -182,7 +188,7 @@ class NormalConsistency {
                                            : map_->nearest(q, k, gate2, idx.data(), d2.data());
     // Lines 4-10 with both axes cached: keep agreeing candidates until 5 are kept.
     for (std::size_t j = 0; j < n; ++j) {
-      if (detail::axes_agree(n1, map_->axis(idx[j]), cos_max_)) {
+      if (detail::axes_agree(n1, map_->axis(idx[j], hint), cos_max_)) {
         detail::push_match(m, idx[j], j + 1);
         if (m.count == keep) return m;
       }
@@ -193,8 +199,9 @@ class NormalConsistency {
 
   void associate_impl(const SE3d& T_map_scan, Correspondences& out, NearestCache* cache) const {
     detail::associate_each(features_, map_, T_map_scan, out,
-                           [this, cache](std::size_t i, const Eigen::Matrix3d& R, const Eigen::Vector3d& t) {
-                             return match_impl(i, R, t, cache);
+                           [this, cache, hint = FeatureMap::AxisHint{}](std::size_t i, const Eigen::Matrix3d& R,
+                                                                        const Eigen::Vector3d& t) mutable {
+                             return match_impl(i, R, t, cache, hint);
                            });
   }
 

@@ -55,6 +55,8 @@ class NormalConsistencyReference {
     features_ = &points_scan;
     scan_tree_.build(points_scan);
   }
+  /// Not from a temporary: only a pointer to the features is kept.
+  void set_scan(std::vector<Eigen::Vector3f>&&) = delete;
 
   /// Matches of feature i at pose (R, t) = T_map_scan (preconditions as
   /// NormalConsistency::match).
