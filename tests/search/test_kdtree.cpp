@@ -382,3 +382,40 @@ TEST_CASE("KdTree3f concurrent const queries agree with serial ones", "[search]"
 }
 
 }  // namespace test_kdtree
+
+TEST_CASE("SmallKdTree3f knn_seeded equals knn whatever the seeds", "[search]") {
+  // Seeds from the previous query in a walk (near), from a random far point,
+  // fewer seeds than k (ignored) and k = 1: every answer is knn's, bit for bit.
+  const semlio::Scan s0 = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  std::vector<Eigen::Vector3f> pts;
+  for (std::size_t i = 0; i < s0.points.size(); i += 9) pts.push_back(s0.points[i]);
+  semlio::SmallKdTree3f tree;
+  tree.build(pts);
+  std::mt19937 rng(31);
+  std::uniform_int_distribution<std::size_t> pick(0, pts.size() - 1);
+  std::size_t mismatches = 0;
+  std::size_t compared = 0;
+  for (const std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{25}}) {
+    std::array<std::uint32_t, 64> seeded{};
+    std::array<float, 64> seeded_d2{};
+    std::size_t known = 0;
+    for (int step = 0; step < 600; ++step) {
+      // Mostly the next point in leaf order (near), every 7th a random one
+      // (far), every 11th with too few seeds.
+      const std::size_t at =
+          step % 7 == 0 ? pick(rng) : tree.leaf_order()[static_cast<std::size_t>(step) % pts.size()];
+      const Eigen::Vector3f q = pts[at] + Eigen::Vector3f(0.01F, -0.02F, 0.005F);
+      if (step % 11 == 0 && known > 1) known -= 1;
+      std::array<std::uint32_t, 64> idx{};
+      std::array<float, 64> d2{};
+      const std::size_t n = tree.knn(q, k, idx.data(), d2.data());
+      known = tree.knn_seeded(q, k, seeded.data(), seeded_d2.data(), known);
+      bool same = known == n;
+      for (std::size_t j = 0; same && j < n; ++j) same = seeded[j] == idx[j] && seeded_d2[j] == d2[j];
+      mismatches += same ? 0U : 1U;
+      ++compared;
+    }
+  }
+  CHECK(compared == 1800U);
+  CHECK(mismatches == 0);
+}

@@ -37,7 +37,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -151,21 +150,15 @@ class NormalConsistency {
     axes_kind_ = map_ != nullptr ? map_->kind() : FeatureKind::kPlane;
     scan_axes_.resize(features_->size());
     // In the tree's leaf order (each axis is independent of the others): the
-    // same results, fewer cache misses than feature order.
+    // same results, fewer cache misses than feature order, and each search
+    // seeded by its neighbour's.
     const auto k = static_cast<std::size_t>(config_.scan_neighbours);
     std::array<std::uint32_t, kMaxShapeNeighbours> idx;  // uninitialised (see kMaxCandidateList)
     std::array<float, kMaxShapeNeighbours> d2;
     std::size_t n = 0;
     for (const std::uint32_t i : scan_tree_.leaf_order()) {
-      const Eigen::Vector3f& q = (*features_)[i];
-      // The previous feature's k neighbours lie within `bound` of this one:
-      // so do its own k nearest, and a search bounded there finds exactly
-      // them, skipping early what an unbounded one visits until full.
-      float bound = n == k ? 0.0F : std::numeric_limits<float>::infinity();
-      for (std::size_t j = 0; j < n && n == k; ++j) {
-        bound = std::max(bound, detail::nanoflann_sq_distance(q, scan_tree_.point(idx[j])));
-      }
-      n = scan_tree_.knn(q, k, idx.data(), d2.data(), bound);
+      // Seeded with the previous (nearby) feature's neighbours.
+      n = scan_tree_.knn_seeded((*features_)[i], k, idx.data(), d2.data(), n);
       scan_axes_[i] = detail::neighbourhood_axis(scan_tree_, axes_kind_, idx.data(), n);
     }
   }

@@ -502,47 +502,31 @@ class FeatureMap {
     return n;
   }
 
+  /// The shape neighbourhood of the last axis fitted through axis(i, hint).
+  struct AxisHint {
+    std::array<std::uint32_t, kMaxShapeNeighbours> idx;  ///< its map points (count of them valid)
+    std::size_t count = 0;                               ///< 0: none yet
+  };
+
   /// Unit axis of map point i (normal or line direction; zero = unusable),
   /// fitted on first use over its shape_neighbours() nearest map points and
   /// cached until the next build(). Allocation-free. Precondition: i < size().
   [[nodiscard]] Eigen::Vector3f axis(std::size_t i) const {
-    std::atomic_ref<std::uint8_t> state(axis_state_[i]);
-    if (state.load(std::memory_order_acquire) == kReady) return axes_[i];
-    std::array<std::uint32_t, kMaxShapeNeighbours> idx;
-    std::array<float, kMaxShapeNeighbours> d2;
-    const std::size_t found =
-        tree_.knn(tree_.point(i), static_cast<std::size_t>(shape_neighbours_), idx.data(), d2.data());
-    const Eigen::Vector3f a = detail::neighbourhood_axis(tree_, kind_, idx.data(), found);
-    publish_axis(i, a);
-    return a;
+    AxisHint none;
+    return axis(i, none);
   }
 
-  /// The shape neighbourhood of the last axis a caller had fitted: nearby
-  /// points' neighbourhoods bound each other's search (axis(i, hint)).
-  struct AxisHint {
-    std::array<std::uint32_t, kMaxShapeNeighbours> idx;  ///< its map points (count of them valid)
-    std::size_t count = 0;                               ///< 0: no hint yet
-  };
-
-  /// As axis(i) -- the same vector -- with the caller's hint: when i's axis
-  /// is fitted here, the hint's shape_neighbours() points, all within the
-  /// largest of their distances from point i, bound its k-NN search (which
-  /// then returns the same neighbours and prunes from the start), and the
-  /// hint becomes i's neighbourhood. One hint per thread.
+  /// As axis(i) -- the same vector -- with the caller's hint, the shape
+  /// neighbourhood of the last axis fitted through it: a fit here seeds its
+  /// k-NN search with it (SmallKdTree3f::knn_seeded; a feature's candidates
+  /// lie together) and leaves its own neighbourhood in the hint. One hint
+  /// per thread and map build.
   [[nodiscard]] Eigen::Vector3f axis(std::size_t i, AxisHint& hint) const {
     std::atomic_ref<std::uint8_t> state(axis_state_[i]);
     if (state.load(std::memory_order_acquire) == kReady) return axes_[i];
-    const auto k = static_cast<std::size_t>(shape_neighbours_);
-    const Eigen::Vector3f& p = tree_.point(i);
-    float bound = std::numeric_limits<float>::infinity();
-    if (hint.count == k) {
-      bound = 0.0F;
-      for (std::size_t j = 0; j < k; ++j) {
-        bound = std::max(bound, detail::nanoflann_sq_distance(p, tree_.point(hint.idx[j])));
-      }
-    }
     std::array<float, kMaxShapeNeighbours> d2;
-    hint.count = tree_.knn(p, k, hint.idx.data(), d2.data(), bound);
+    hint.count = tree_.knn_seeded(tree_.point(i), static_cast<std::size_t>(shape_neighbours_), hint.idx.data(),
+                                  d2.data(), hint.count);
     const Eigen::Vector3f a = detail::neighbourhood_axis(tree_, kind_, hint.idx.data(), hint.count);
     publish_axis(i, a);
     return a;

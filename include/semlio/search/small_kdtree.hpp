@@ -136,6 +136,20 @@ class SmallKdTree3f {
     return r.count;
   }
 
+  /// As knn(q, k, idx, sq_dist) -- the same result -- where idx[0..known)
+  /// already holds points of the tree, e.g. the k nearest of a nearby
+  /// earlier query: when known == k, the k nearest of q lie within the
+  /// largest of those points' distances from q, so a search bounded there
+  /// finds them and prunes from the start (the nearer the earlier query, the
+  /// more). Allocates nothing.
+  std::size_t knn_seeded(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* idx, float* out_sq_dist,
+                         std::size_t known) const {
+    if (known != k || k == 0) return knn(q, k, idx, out_sq_dist);
+    float bound = 0.0F;
+    for (std::size_t j = 0; j < k; ++j) bound = std::max(bound, sq_dist(q, points_[idx[j]]));
+    return knn(q, k, idx, out_sq_dist, bound);
+  }
+
   /// As knn(q, k, idx, sq_dist), keeping only points with squared distance
   /// <= max_sq_dist [m^2] (nothing when it is negative or NaN): equal to
   /// KdTree3f's bounded knn. The bound also prunes the search, so a query far
