@@ -140,7 +140,7 @@ TEST_CASE("Scan: append_point copies one point with its fields", "[core]") {
   CHECK(dst.times_s[0] == src.times_s[3]);
 }
 
-TEST_CASE("Scan: clear empties every field; reserve keeps the fields valid", "[core]") {
+TEST_CASE("Scan: clear empties every field, reserve keeps the fields valid", "[core]") {
   Scan s = full_scan(12);
   s.clear();
   CHECK(s.empty());

@@ -116,7 +116,7 @@ TEST_CASE("eigen_symmetric3 on degenerate matrices", "[features]") {
   }
 }
 
-TEST_CASE("eigen_symmetric3 reads only the upper triangle; NaN propagates", "[features]") {
+TEST_CASE("eigen_symmetric3 reads only the upper triangle, NaN propagates", "[features]") {
   Matrix3d C;
   C << 2, 1, 0, 99, 3, 0.5, -7, 99, 1;  // lower triangle is garbage
   Matrix3d S = C.selfadjointView<Eigen::Upper>();

@@ -231,7 +231,7 @@ TEST_CASE("an indefinite information matrix given directly gives a singular stat
   CHECK(graph.pose(1).translation().x() == 0.5);
 }
 
-TEST_CASE("bad input throws; non-finite estimates give a status", "[graph]") {
+TEST_CASE("bad input throws, non-finite estimates give a status", "[graph]") {
   PoseGraph3d graph;
   graph.add_node(SE3d());
   graph.add_node(SE3d());

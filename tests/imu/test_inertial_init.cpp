@@ -117,7 +117,7 @@ TEST_CASE("inertial init: exact data give the exact answer", "[imu]") {
   CHECK((r.velocities_map_mps.back() - w.v_map_imu.back()).norm() < 1e-3);
 }
 
-TEST_CASE("inertial init: the accel bias needs rotation; failure statuses", "[imu]") {
+TEST_CASE("inertial init: the accel bias needs rotation, failure statuses", "[imu]") {
   const Eigen::Vector3d ba(0.1, -0.08, 0.05);
   const semlio::PreintegrationConfig pc;
   const SE3d T_imu_lidar = semlio_test::inertial_T_imu_body();

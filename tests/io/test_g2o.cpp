@@ -171,7 +171,7 @@ TEST_CASE("g2o: malformed lines throw FormatError naming path and line", "[io]")
   CHECK_THROWS_AS(read_g2o("/nonexistent/semlio/graph.g2o"), semlio::IoError);
 }
 
-TEST_CASE("g2o: FIX lines choose the gauge; other tags are skipped and counted", "[io]") {
+TEST_CASE("g2o: FIX lines choose the gauge, other tags are skipped and counted", "[io]") {
   const std::string content =
       "# comment\n"
       "VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0\nVERTEX_SE2 2 2 0 0\n"

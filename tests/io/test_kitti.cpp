@@ -198,7 +198,7 @@ TEST_CASE("bin: NaN/Inf and exact zero points are dropped, counted, and labels s
   CHECK(stats.dropped() == 10);
 }
 
-TEST_CASE("label: count mismatch names both counts and the path; bad size is a FormatError", "[io]") {
+TEST_CASE("label: count mismatch names both counts and the path, bad size is a FormatError", "[io]") {
   semlio_test::KittiTempDir dir("kitti");
   semlio_test::write_text(dir.file("s.bin"), bin_bytes({{1, 2, 3, 0}, {4, 5, 6, 0}, {7, 8, 9, 0}}));
   semlio_test::write_text(dir.file("s.label"), label_bytes({40, 40}));

@@ -66,7 +66,7 @@ TEST_CASE("VoxelGrid centroid, first point, majority label and order", "[search]
   }
 }
 
-TEST_CASE("VoxelGrid counts voxels like brute force; skips non-finite; rejects bad leaves", "[search]") {
+TEST_CASE("VoxelGrid counts voxels like brute force, skips non-finite, rejects bad leaves", "[search]") {
   std::mt19937 rng(2);
   std::uniform_real_distribution<float> u(-10.0F, 10.0F);
   std::vector<Vector3f> pts(5000);

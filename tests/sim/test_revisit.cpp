@@ -108,7 +108,7 @@ TEST_CASE("revisit routes are deterministic and long drives use block loops", "[
   CHECK(!u.world.ego_stop_points.empty());
 }
 
-TEST_CASE("revisit traffic never drives into the ego; the lidar stays clear", "[sim]") {
+TEST_CASE("revisit traffic never drives into the ego, the lidar stays clear", "[sim]") {
   for (const WorldKind kind : {WorldKind::kUrban, WorldKind::kRural, WorldKind::kHighway}) {
     INFO(world_name(kind));
     SimulatorConfig c;

@@ -81,7 +81,7 @@ TEST_CASE("urban labels: classes present in plausible proportions, instances on 
   CHECK(at(Class::kCar) < 0.5);
 }
 
-TEST_CASE("same seed, same bytes; thread count does not change the output", "[sim]") {
+TEST_CASE("same seed, same bytes, thread count does not change the output", "[sim]") {
   SimulatorConfig c = small_config();
   c.traffic = TrafficLevel::kHeavy;
   const Simulator a(c);

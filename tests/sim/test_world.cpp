@@ -69,7 +69,7 @@ TEST_CASE("revisit routes are loops that return to their start", "[sim]") {
   }
 }
 
-TEST_CASE("rural world has hills of tens of metres; highway has guard rails", "[sim]") {
+TEST_CASE("rural world has hills of tens of metres, highway has guard rails", "[sim]") {
   WorldConfig c;
   c.kind = WorldKind::kRural;
   c.drive_length_m = 1500.0;
