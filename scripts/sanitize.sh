@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Builds the tests and examples with GCC's sanitizers and runs the CTest
-# suite on them: memory errors and undefined behaviour (default), or data
-# races in the code that runs threads.
+# Builds semlio's tests (and, in address mode, the examples the CTest suite
+# runs) with GCC's sanitizers and runs CTest on them: memory errors and
+# undefined behaviour (default), or data races in the code that runs
+# threads.
 #
 #   scripts/sanitize.sh [address|thread]
 #
