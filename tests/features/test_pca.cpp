@@ -77,6 +77,29 @@ TEST_CASE("eigen_symmetric3 matches Eigen on random symmetric matrices", "[featu
   }
 }
 
+TEST_CASE("cubic_top_root is the largest root of x^3 - 3x = 2s", "[features]") {
+  using semlio::detail::cubic_top_root;
+  // Hand-computed: s = 0 -> x (x^2 - 3) = 0 -> sqrt 3; s = 1 -> (x - 2)(x + 1)^2 = 0 -> 2;
+  // s = 1/2 -> 2 cos(pi / 9) (the triple-angle identity 4 c^3 - 3 c = cos 3 theta).
+  CHECK(std::abs(cubic_top_root(0.0) - std::sqrt(3.0)) <= 1e-15);
+  CHECK(std::abs(cubic_top_root(1.0) - 2.0) <= 1e-15);
+  CHECK(std::abs(cubic_top_root(0.5) - 1.8793852415718167) <= 1e-15);
+  // Against the trigonometric form it replaces, and as a root, on a fine grid.
+  double worst = 0.0;
+  double worst_residual = 0.0;
+  for (int i = 0; i <= 100000; ++i) {
+    const double s = i / 100000.0;
+    const double x = cubic_top_root(s);
+    worst = std::max(worst, std::abs(x - 2.0 * std::cos(std::acos(s) / 3.0)));
+    worst_residual = std::max(worst_residual, std::abs(x * (x * x - 3.0) - 2.0 * s));
+    REQUIRE(x >= std::sqrt(3.0) - 1e-15);
+    REQUIRE(x <= 2.0 + 1e-15);
+  }
+  INFO("worst difference " << worst << ", worst residual " << worst_residual);
+  CHECK(worst <= 2e-15);
+  CHECK(worst_residual <= 1e-14);
+}
+
 TEST_CASE("eigen_symmetric3 on degenerate matrices", "[features]") {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
