@@ -101,8 +101,6 @@ inline Eigen::Vector3d separated_eigenvector(const Eigen::Matrix3d& A, double la
   return any_orthogonal(r * (1.0 / std::sqrt(mr)));
 }
 
-}  // namespace detail
-
 /// Largest root of x^3 - 3 x = 2 s for s in [0, 1] (it lies in [sqrt 3, 2]),
 /// i.e. 2 cos(acos(s) / 3), without trigonometry: a cubic through the
 /// function's values at the four Chebyshev nodes of [0, 1] (within 8.2e-5 of
@@ -118,6 +116,8 @@ inline double cubic_top_root(double s) {
   }
   return x;
 }
+
+}  // namespace detail
 
 /// Which end of the spectrum eigenvector_symmetric3 returns.
 enum class EigenEnd : std::uint8_t {
