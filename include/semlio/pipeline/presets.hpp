@@ -27,16 +27,6 @@
 /// (Robust::set_min_scale_m). Measured (README, Status): the ATE of both
 /// presets halves on simulated drives with and without traffic, and the real
 /// KITTI raw snippet's forward/backward runs agree better.
-///
-/// Re-association every second Gauss-Newton iteration (default of both;
-/// `solver.reassociate_every: 1` is LIO-SAM's every iteration). The odd
-/// iterations re-solve the previous matches at the new pose (their line and
-/// plane fits are reused), and the solver always re-associates before it
-/// declares convergence, so the answer is still checked against the matches
-/// at the final pose (FAST-LIO2 likewise re-searches its neighbours only on
-/// some iterations). Measured (README, Frame time): accuracy unchanged on the
-/// simulated drives and the real snippet, and one to two fewer associations
-/// a frame: the full preset's frame 5-7 % shorter on the real snippet.
 
 #include <cmath>
 #include <limits>
@@ -58,12 +48,10 @@
 namespace semlio {
 
 /// The presets' pipeline settings: OdometryConfig's defaults, with
-/// degenerate directions damped rather than frozen and re-association every
-/// second Gauss-Newton iteration (file comment).
+/// degenerate directions damped rather than frozen (file comment).
 inline OdometryConfig preset_odometry_config() {
   OdometryConfig c;
   c.solver.damp_degenerate = true;
-  c.solver.reassociate_every = 2;
   return c;
 }
 
