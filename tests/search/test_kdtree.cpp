@@ -381,6 +381,49 @@ TEST_CASE("KdTree3f concurrent const queries agree with serial ones", "[search]"
   CHECK(parallel == serial);
 }
 
+TEST_CASE("SmallKdTree3f on lopsided clouds equals brute force", "[search]") {
+  // Clouds whose midpoint splits leave less than a quarter on one side, so
+  // the build takes its fallbacks: a dense cluster with a few far points
+  // (the sampled median), and coordinates mostly equal along the widest axis
+  // (the sample's median is that value, the sampled split is lopsided too,
+  // and the exact median decides). Also a real KITTI scan cut to a street's
+  // clustered points. Every answer equals brute force by (distance, index).
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0F, 1.0F);
+  std::vector<std::vector<Vector3f>> clouds(3);
+  for (int i = 0; i < 2000; ++i) clouds[0].emplace_back(0.01F * u(rng), 0.01F * u(rng), 0.01F * u(rng));
+  for (int i = 0; i < 50; ++i) clouds[0].emplace_back(100.0F * u(rng), 100.0F * u(rng), 100.0F * u(rng));
+  for (int i = 0; i < 900; ++i) clouds[1].emplace_back(0.0F, 0.5F * u(rng), 0.0F);
+  for (int i = 0; i < 100; ++i) clouds[1].emplace_back(1.0F + 99.0F * u(rng), 0.5F * u(rng), 0.0F);
+  const semlio::Scan scan = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  for (std::size_t i = 0; i < scan.points.size(); i += 7) {
+    if (scan.points[i].norm() < 30.0F) clouds[2].push_back(scan.points[i]);
+  }
+  semlio::SmallKdTree3f tree;
+  std::size_t compared = 0;
+  for (const std::vector<Vector3f>& pts : clouds) {
+    tree.build(pts);
+    for (int t = 0; t < 60; ++t) {
+      // Half the queries at cloud points (inside the cluster), half anywhere.
+      const Vector3f q = t % 2 == 0 ? pts[static_cast<std::size_t>(t) * 37 % pts.size()]
+                                    : Vector3f(100.0F * u(rng) - 20.0F, 100.0F * u(rng) - 20.0F, 4.0F * u(rng) - 2.0F);
+      const auto ref = brute(pts, q);
+      for (const std::size_t k : {std::size_t{1}, std::size_t{10}, std::size_t{20}}) {
+        std::vector<std::uint32_t> idx(k);
+        std::vector<float> d(k);
+        const std::size_t n = tree.knn(q, k, idx.data(), d.data());
+        REQUIRE(n == k);
+        for (std::size_t i = 0; i < n; ++i) {
+          REQUIRE(idx[i] == ref[i].second);
+          REQUIRE(d[i] == ref[i].first);
+        }
+        ++compared;
+      }
+    }
+  }
+  CHECK(compared == 3U * 60U * 3U);
+}
+
 }  // namespace test_kdtree
 
 TEST_CASE("SmallKdTree3f knn_seeded equals knn whatever the seeds", "[search]") {
