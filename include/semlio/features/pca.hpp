@@ -155,7 +155,7 @@ inline SymmetricSplit split_symmetric3(const Eigen::Matrix3d& C) {
   // One division and nine products instead of nine divisions (here and for B).
   A *= 1.0 / s.scale;
 
-  // Trigonometric roots of det(A - lambda I) = 0 (Smith 1961).
+  // Centre and spread of the roots of det(A - lambda I) = 0 (Smith 1961).
   s.q = A.trace() / 3.0;
   const double p1 = A(0, 1) * A(0, 1) + A(0, 2) * A(0, 2) + A(1, 2) * A(1, 2);
   const double d0 = A(0, 0) - s.q;
