@@ -246,17 +246,19 @@ class SmallKdTree3f {
     float split = 0.5F * (lo[a] + hi[a]);
     const auto first = work_.begin() + begin;
     const auto last = work_.begin() + end;
-    auto mid = static_cast<std::uint32_t>(
-        std::partition(first, last, [a, split](const Entry& e) { return e.p[a] < split; }) - work_.begin());
+    const auto partition_at = [&](float s) {
+      return static_cast<std::uint32_t>(
+          std::partition(first, last, [a, s](const Entry& e) { return e.p[a] < s; }) - work_.begin());
+    };
+    auto mid = partition_at(split);
     const std::uint32_t quarter = (end - begin) / 4;
     if (mid - begin < quarter || end - mid < quarter) {
       std::array<float, kSplitSample> sample;
-      const std::uint32_t n = end - begin;  // > kLeaf >= kSplitSample
-      for (std::uint32_t j = 0; j < kSplitSample; ++j) sample[j] = work_[begin + j * n / kSplitSample].p[a];
+      const std::size_t n = end - begin;  // > kLeaf >= kSplitSample
+      for (std::size_t j = 0; j < kSplitSample; ++j) sample[j] = work_[begin + j * n / kSplitSample].p[a];
       std::nth_element(sample.begin(), sample.begin() + kSplitSample / 2, sample.end());
       split = sample[kSplitSample / 2];
-      mid = static_cast<std::uint32_t>(
-          std::partition(first, last, [a, split](const Entry& e) { return e.p[a] < split; }) - work_.begin());
+      mid = partition_at(split);
     }
     if (mid - begin < quarter || end - mid < quarter) {
       mid = begin + (end - begin) / 2;
