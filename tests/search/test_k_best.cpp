@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -87,6 +89,85 @@ TEST_CASE("KBest keeps the k best exactly as insert_by_distance_index", "[search
     CHECK(idx[0] == 1);
     CHECK(std::isnan(d2[1]));
   }
+}
+
+namespace {
+
+/// True when sort_keys<N> sorts every 0-1 input of length N: by the 0-1
+/// principle a comparator network that sorts all 2^N binary sequences sorts
+/// every sequence.
+template <std::size_t N>
+bool sorts_every_binary_input() {
+  std::array<std::uint64_t, N> a{};
+  for (std::uint32_t bits = 0; bits < (1U << N); ++bits) {
+    for (std::size_t j = 0; j < N; ++j) a[j] = (bits >> j) & 1U;
+    semlio::detail::sort_keys<N>(a.data());
+    if (!std::is_sorted(a.begin(), a.end())) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("sort_keys sorts like std::sort: Batcher's networks on 4, 8 and 16 keys", "[search]") {
+  CHECK(semlio::detail::kBatcherNetwork<4>.size() == 5);
+  CHECK(semlio::detail::kBatcherNetwork<8>.size() == 19);
+  CHECK(semlio::detail::kBatcherNetwork<16>.size() == 63);
+  CHECK(sorts_every_binary_input<4>());
+  CHECK(sorts_every_binary_input<8>());
+  CHECK(sorts_every_binary_input<16>());
+  // Full 64-bit keys: distances with ties, the padding key, permutations.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> level(0, 6);
+  std::size_t mismatches = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::array<std::uint64_t, 16> a{};
+    for (std::size_t j = 0; j < a.size(); ++j) {
+      a[j] = j % 5 == 4 ? ~std::uint64_t{0}
+                        : semlio::detail::distance_index_key(0.5F * static_cast<float>(level(rng)),
+                                                             static_cast<std::uint32_t>(rng() % 64U));
+    }
+    std::array<std::uint64_t, 16> ref = a;
+    std::sort(ref.begin(), ref.end());
+    semlio::detail::sort_keys<16>(a.data());
+    mismatches += a == ref ? 0U : 1U;
+  }
+  CHECK(mismatches == 0);
+}
+
+TEST_CASE("KBest::assign_sorted holds what offering the keys one by one holds", "[search]") {
+  std::mt19937 rng(6);
+  std::uniform_int_distribution<int> level(0, 9);
+  std::size_t mismatches = 0;
+  for (std::size_t k = 1; k <= 20; ++k) {
+    for (std::size_t n = 0; n <= 16; ++n) {
+      std::vector<std::uint64_t> keys;
+      semlio::detail::KBest offered(k);
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const float d = 0.25F * static_cast<float>(level(rng));
+        const std::uint32_t idx = (i * 37U + static_cast<std::uint32_t>(k)) % 101U;
+        keys.push_back(semlio::detail::distance_index_key(d, idx));
+        offered.offer(d, idx);
+      }
+      std::sort(keys.begin(), keys.end());
+      semlio::detail::KBest assigned(k);
+      assigned.assign_sorted(keys.data(), keys.size());
+      for (std::uint32_t i = 0; i < 10; ++i) {  // later leaves: offers on top of the block
+        const float d = 0.25F * static_cast<float>(level(rng));
+        assigned.offer(d, 200 + i);
+        offered.offer(d, 200 + i);
+      }
+      std::array<std::uint32_t, 20> ia{};
+      std::array<float, 20> da{};
+      std::array<std::uint32_t, 20> ib{};
+      std::array<float, 20> db{};
+      const std::size_t na = assigned.write(ia.data(), da.data());
+      const std::size_t nb = offered.write(ib.data(), db.data());
+      mismatches += na == nb && assigned.full() == offered.full() && ia == ib && da == db ? 0U : 1U;
+      if (na > 0) mismatches += assigned.worst() == offered.worst() ? 0U : 1U;
+    }
+  }
+  CHECK(mismatches == 0);
 }
 
 }  // namespace test_k_best

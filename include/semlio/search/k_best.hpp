@@ -10,6 +10,7 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 
 namespace semlio::detail {
 
@@ -41,6 +42,74 @@ inline std::size_t insert_by_distance_index(float d, std::uint32_t i, std::uint3
   d2[j] = d;
   idx[j] = i;
   return count < k ? count + 1 : count;
+}
+
+/// One compare-exchange of a sorting network: afterwards a[lo] <= a[hi].
+struct CompareExchange {
+  std::uint8_t lo;  ///< index that receives the smaller key
+  std::uint8_t hi;  ///< index that receives the larger key
+};
+
+/// Calls f(lo, hi) for each compare-exchange of Batcher's odd-even merge
+/// sort on N inputs (N a power of two), in the order they run.
+template <std::size_t N, typename F>
+constexpr void for_each_batcher_exchange(F&& f) {
+  static_assert(N >= 2 && (N & (N - 1)) == 0, "Batcher's network sorts a power of two of inputs");
+  for (std::size_t p = 1; p < N; p <<= 1U) {
+    for (std::size_t k = p; k >= 1; k >>= 1U) {
+      for (std::size_t j = k % p; j + k < N; j += 2 * k) {
+        for (std::size_t i = 0; i < k && i < N - j - k; ++i) {
+          if ((i + j) / (2 * p) == (i + j + k) / (2 * p)) f(i + j, i + j + k);
+        }
+      }
+    }
+  }
+}
+
+/// Number of compare-exchanges of that network: 5, 19 and 63 for 4, 8 and 16 inputs.
+template <std::size_t N>
+constexpr std::size_t batcher_network_size() {
+  std::size_t c = 0;
+  for_each_batcher_exchange<N>([&c](std::size_t, std::size_t) { ++c; });
+  return c;
+}
+
+/// Batcher's odd-even merge sort on N inputs, as its list of compare-exchanges.
+template <std::size_t N>
+constexpr std::array<CompareExchange, batcher_network_size<N>()> batcher_network() {
+  std::array<CompareExchange, batcher_network_size<N>()> out{};
+  std::size_t c = 0;
+  for_each_batcher_exchange<N>([&](std::size_t lo, std::size_t hi) {
+    out[c++] = CompareExchange{static_cast<std::uint8_t>(lo), static_cast<std::uint8_t>(hi)};
+  });
+  return out;
+}
+
+/// The network sort_keys<N> runs.
+template <std::size_t N>
+inline constexpr auto kBatcherNetwork = batcher_network<N>();
+
+// sort_keys' body: one compare-exchange per network entry, unrolled.
+template <std::size_t N, std::size_t... I>
+inline void sort_keys_unrolled(std::uint64_t* a, std::index_sequence<I...>) noexcept {
+  const auto exchange = [a](std::size_t lo, std::size_t hi) {
+    const std::uint64_t x = a[lo];
+    const std::uint64_t y = a[hi];
+    a[lo] = x < y ? x : y;
+    a[hi] = x < y ? y : x;
+  };
+  (exchange(kBatcherNetwork<N>[I].lo, kBatcherNetwork<N>[I].hi), ...);
+}
+
+/// Sorts a[0..N) ascending (N = 4, 8, 16, ...) by a sorting network: a fixed
+/// sequence of min / max pairs (conditional moves), so no branch depends on
+/// the keys. Why: SmallKdTree3f hands the candidates of a search's first
+/// leaf -- up to 16 at once, in no useful order -- to an empty KBest; offered
+/// one by one, each costs its shifts and a data-dependent exit of the
+/// insertion loop (file comment of small_kdtree.hpp for the numbers).
+template <std::size_t N>
+inline void sort_keys(std::uint64_t* a) noexcept {
+  sort_keys_unrolled<N>(a, std::make_index_sequence<kBatcherNetwork<N>.size()>{});
 }
 
 /// Most entries a KBest holds.
@@ -84,6 +153,15 @@ class KBest {
       --j;
     }
     keys_[j] = key;
+  }
+
+  /// Fills an empty KBest (precondition: size() == 0) with the first
+  /// min(n, k) of `keys` (distance_index_key values, ascending and distinct):
+  /// the same entries as offering all n keys one by one.
+  void assign_sorted(const std::uint64_t* keys, std::size_t n) noexcept {
+    n = n < k_ ? n : k_;
+    for (std::size_t j = 0; j < n; ++j) keys_[j + 1] = keys[j];
+    count_ = n;
   }
 
   /// Writes the entries, ascending, into idx / d2 (each size() long); returns size().
