@@ -41,15 +41,14 @@
 /// first leaf with an empty k-best list and passes it up to 16 points in leaf
 /// order -- most of a query's candidates (10-NN axes: up to 16 of the ~21
 /// offered). Offered one at a time, each pays the shifts of an insertion and
-/// a data-dependent exit of its loop that the branch predictor cannot learn. They are instead made keys, sorted by a
+/// a data-dependent exit of its loop. They are instead made keys, sorted by a
 /// branch-free network (detail::sort_keys: 5, 19 or 63 compare-exchanges for
 /// up to 4, 8 or 16 of them) and taken as one block: the entries the offers
 /// would have kept. Later leaves meet a list that is (nearly) full and pass it
 /// a few points each, where the insertion is cheap (a merge of sorted blocks
 /// there measured no better in the frame; the scalar fallback keeps the
-/// plain insertion). `MapKnn`, two builds alternated,
-/// three runs: 10-NN axes 2.80 -> 2.39 ms, 32-NN lists 7.05 -> 6.40 ms,
-/// 20-NN refills 2.64 -> 2.55 ms.
+/// plain insertion). `MapKnn`, two builds alternated, three runs: 10-NN axes
+/// 2.80 -> 2.39 ms, 32-NN lists 7.05 -> 6.40 ms, 20-NN refills 2.64 -> 2.55 ms.
 
 #include <Eigen/Core>
 
