@@ -135,7 +135,7 @@ TEST_CASE("sort_keys sorts like std::sort: Batcher's networks on 4, 8 and 16 key
   CHECK(mismatches == 0);
 }
 
-TEST_CASE("KBest::assign_sorted holds what offering the keys one by one holds", "[search]") {
+TEST_CASE("KBest::assign_sorted and assign_unsorted hold what offering the keys one by one holds", "[search]") {
   std::mt19937 rng(6);
   std::uniform_int_distribution<int> level(0, 9);
   std::size_t mismatches = 0;
@@ -149,12 +149,17 @@ TEST_CASE("KBest::assign_sorted holds what offering the keys one by one holds", 
         keys.push_back(semlio::detail::distance_index_key(d, idx));
         offered.offer(d, idx);
       }
+      std::array<std::uint64_t, 16> unsorted{};
+      std::copy(keys.begin(), keys.end(), unsorted.begin());  // still in offer order
       std::sort(keys.begin(), keys.end());
       semlio::detail::KBest assigned(k);
       assigned.assign_sorted(keys.data(), keys.size());
+      semlio::detail::KBest blocked(k);
+      blocked.assign_unsorted(unsorted.data(), n);
       for (std::uint32_t i = 0; i < 10; ++i) {  // later leaves: offers on top of the block
         const float d = 0.25F * static_cast<float>(level(rng));
         assigned.offer(d, 200 + i);
+        blocked.offer(d, 200 + i);
         offered.offer(d, 200 + i);
       }
       std::array<std::uint32_t, 20> ia{};
@@ -165,6 +170,10 @@ TEST_CASE("KBest::assign_sorted holds what offering the keys one by one holds", 
       const std::size_t nb = offered.write(ib.data(), db.data());
       mismatches += na == nb && assigned.full() == offered.full() && ia == ib && da == db ? 0U : 1U;
       if (na > 0) mismatches += assigned.worst() == offered.worst() ? 0U : 1U;
+      std::array<std::uint32_t, 20> ic{};
+      std::array<float, 20> dc{};
+      const std::size_t nc = blocked.write(ic.data(), dc.data());
+      mismatches += nc == nb && blocked.full() == offered.full() && ic == ib && dc == db ? 0U : 1U;
     }
   }
   CHECK(mismatches == 0);

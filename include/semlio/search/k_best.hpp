@@ -164,6 +164,24 @@ class KBest {
     count_ = n;
   }
 
+  /// Fills an empty KBest (precondition: size() == 0) from m <= 16 distinct
+  /// keys in any order, overwriting keys[m..16) (keys is 16 long): they are
+  /// padded with the largest key, sorted by the smallest network that holds
+  /// them (sort_keys) and taken as one block -- the same entries as offering
+  /// the m keys one by one, without an insertion per key (SmallKdTree3f's
+  /// first leaf, see its file comment).
+  void assign_unsorted(std::uint64_t* keys, std::size_t m) noexcept {
+    for (std::size_t j = m; j < 16; ++j) keys[j] = ~std::uint64_t{0};
+    if (m <= 4) {
+      sort_keys<4>(keys);
+    } else if (m <= 8) {
+      sort_keys<8>(keys);
+    } else {
+      sort_keys<16>(keys);
+    }
+    assign_sorted(keys, m);
+  }
+
   /// Writes the entries, ascending, into idx / d2 (each size() long); returns size().
   std::size_t write(std::uint32_t* idx, float* d2) const noexcept {
     for (std::size_t j = 0; j < count_; ++j) {

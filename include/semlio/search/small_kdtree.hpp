@@ -42,8 +42,8 @@
 /// order -- most of a query's candidates (10-NN axes: up to 16 of the ~21
 /// offered). Offered one at a time, each pays the shifts of an insertion and
 /// a data-dependent exit of its loop. They are instead made keys, sorted by a
-/// branch-free network (detail::sort_keys: 5, 19 or 63 compare-exchanges for
-/// up to 4, 8 or 16 of them) and taken as one block: the entries the offers
+/// branch-free network and taken as one block (KBest::assign_unsorted; 5, 19
+/// or 63 compare-exchanges for up to 4, 8 or 16 keys): the entries the offers
 /// would have kept. Later leaves meet a list that is (nearly) full and pass it
 /// a few points each, where the insertion is cheap (a merge of sorted blocks
 /// there measured no better in the frame; the scalar fallback keeps the
@@ -391,25 +391,16 @@ class SmallKdTree3f {
     mask &= count >= 32 ? ~0U : (1U << count) - 1U;
     if constexpr (std::is_same_v<R, KeyResult>) {
       if (r.best.size() == 0) {
-        // The first leaf of a search (file comment): its passing points as
-        // keys, padded with the largest key, sorted by the smallest network
-        // that holds them, then taken as a block.
-        static_assert(kLeaf <= 16, "the networks below sort at most 16 keys");
+        // The first leaf of a search (file comment): its passing points taken
+        // as one block.
+        static_assert(kLeaf <= 16, "KBest::assign_unsorted takes at most 16 keys");
         alignas(16) std::array<std::uint64_t, 16> keys;
         std::size_t m = 0;
         for (unsigned bits = mask; bits != 0; bits &= bits - 1U) {
           const auto j = static_cast<std::uint32_t>(std::countr_zero(bits));
           keys[m++] = detail::distance_index_key(d[j], order_[n.begin + j]);
         }
-        for (std::size_t j = m; j < keys.size(); ++j) keys[j] = ~std::uint64_t{0};
-        if (m <= 4) {
-          detail::sort_keys<4>(keys.data());
-        } else if (m <= 8) {
-          detail::sort_keys<8>(keys.data());
-        } else {
-          detail::sort_keys<16>(keys.data());
-        }
-        r.best.assign_sorted(keys.data(), m);
+        r.best.assign_unsorted(keys.data(), m);
         return;
       }
     }
