@@ -299,7 +299,13 @@ class PoseGraph {
   Eigen::Matrix<double, kDim, 1> error(const Factor& f, const Pose& a, const Pose& b,
                                        Eigen::Matrix<double, kDim, kDim>* J_a,
                                        Eigen::Matrix<double, kDim, kDim>* J_b) const {
-    if (f.kind == FactorKind::prior) return between_error(f.measured, Pose(), b, config_.convention, nullptr, J_b);
+    if (f.kind == FactorKind::prior) {
+      // A prior has no `from` node, but linearize() reads J_a for every
+      // factor: zero it rather than leave it unwritten (an uninitialised
+      // read; clang 14 at -O1 and up turned it into a non-finite status).
+      if (J_a != nullptr) J_a->setZero();
+      return between_error(f.measured, Pose(), b, config_.convention, nullptr, J_b);
+    }
     return between_error(f.measured, a, b, config_.convention, J_a, J_b);
   }
 
