@@ -355,8 +355,17 @@ inline World make_strip_world(const WorldConfig& config) {
         const double l = side * (road_edge + rng.uniform(18.0, 35.0));
         const Eigen::Vector3d g = place(i, l);
         const double bh = rng.uniform(5.0, 9.0);
-        wb.box(g + Eigen::Vector3d(0.0, 0.0, 0.5 * bh - 1.0), {rng.uniform(4.0, 8.0), rng.uniform(4.0, 7.0), 0.5 * bh + 1.0},
-               yaw + rng.uniform(-0.3, 0.3), raw::kBuilding, wb.new_instance(), rng.uniform(0.7, 1.3));
+        // Draws go through named values wherever a call takes two: the order in
+        // which a call's arguments are evaluated is unspecified (GCC goes right
+        // to left, clang left to right), and the drives must not depend on the
+        // compiler. The order here is GCC's, so drives stay what they were.
+        const double reflectivity = rng.uniform(0.7, 1.3);
+        const std::uint16_t instance = wb.new_instance();
+        const double yaw_jitter = rng.uniform(-0.3, 0.3);
+        const double half_x = rng.uniform(4.0, 8.0);
+        const double half_y = rng.uniform(4.0, 7.0);
+        wb.box(g + Eigen::Vector3d(0.0, 0.0, 0.5 * bh - 1.0), {half_x, half_y, 0.5 * bh + 1.0}, yaw + yaw_jitter,
+               raw::kBuilding, instance, reflectivity);
       }
       // Field fences along some stretches.
       if (std::sin(2.0 * std::numbers::pi * sv / 700.0 + forest_phase) > 0.6 && i + 1 < n && clear(i, road_edge + 6.0)) {
@@ -386,7 +395,9 @@ inline World make_strip_world(const WorldConfig& config) {
       if (i % 24 == 0 && clear(i, 0.0)) wb.pole(place(i, 0.0), 10.0, 0.15);
       if (rng.chance(0.08)) {
         const double side = rng.chance(0.5) ? 1.0 : -1.0;
-        wb.tree(place(i, side * (road_edge + rng.uniform(15.0, 80.0))), rng, rng.uniform(1.0, 1.6));
+        const double scale = rng.uniform(1.0, 1.6);  // named draws: see the house above
+        const double offset = rng.uniform(15.0, 80.0);
+        wb.tree(place(i, side * (road_edge + offset)), rng, scale);
       }
     }
   }
