@@ -86,7 +86,7 @@ TEST_CASE("atan2_fast_pair equals two atan2_fast calls bit for bit", "[core][fas
     // KITTI coordinates are floats: half the pairs come rounded to float.
     double v[4] = {y0, x0, y1, x1};
     if (i % 2 == 0) {
-      for (double& c : v) c = static_cast<float>(c);
+      for (double& c : v) c = static_cast<double>(static_cast<float>(c));
     }
     if (!same(v[0], v[1], v[2], v[3])) ++mismatches;
   }

@@ -209,7 +209,8 @@ void reference_selection(const semlio::Scan& scan, const semlio::LoamFeatureExtr
   for (std::uint32_t i = 0; i < scan.size(); ++i) rings[scan.rings[i]].push_back(i);
   corners.clear();
   surfaces.clear();
-  for (auto& [ring, idx] : rings) {
+  for (auto& ring_points : rings) {
+    std::vector<std::uint32_t>& idx = ring_points.second;  // not a binding: lambdas below capture it (clang < 16)
     std::sort(idx.begin(), idx.end(), [&](std::uint32_t a, std::uint32_t b) { return az[a] < az[b] || (az[a] == az[b] && a < b); });
     const std::size_t m = idx.size();
     if (m < 2 * h + 1) continue;

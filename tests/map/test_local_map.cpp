@@ -153,8 +153,11 @@ TEST_CASE("LocalMap rebuilds by merging equal a from-scratch downsampling bit fo
   corners.labels.clear();
   for (std::size_t i = 0; i < corners.points.size(); ++i) corners.labels.push_back(semlio::class_from_index(static_cast<int>(i % 3)));
   const semlio_test::FeatureCloud& surfaces = f.surfaces;  // unlabeled
-  for (const auto& [cap, first_point] : {std::pair{std::size_t{0}, false}, std::pair{std::size_t{5}, false},
-                                         std::pair{std::size_t{0}, true}, std::pair{std::size_t{5}, true}}) {
+  for (const auto& setting : {std::pair{std::size_t{0}, false}, std::pair{std::size_t{5}, false},
+                               std::pair{std::size_t{0}, true}, std::pair{std::size_t{5}, true}}) {
+    // Named copies, not a structured binding: lambdas below use them (clang < 16 cannot capture bindings).
+    const std::size_t cap = setting.first;
+    const bool first_point = setting.second;
     semlio::LocalMapConfig config;
     config.radius_m = 20.0;
     config.max_keyframes = cap;

@@ -253,11 +253,14 @@ class LoamFeatureExtractor {
     for (; i + 1 < n; i += 2) {  // two at once: atan2_fast_pair equals two atan2_fast calls
       const Eigen::Vector3f& p = scan.points[i];
       const Eigen::Vector3f& q = scan.points[i + 1];
-      const std::array<double, 2> a = atan2_fast_pair(p.y(), p.x(), q.y(), q.x());
+      const std::array<double, 2> a = atan2_fast_pair(static_cast<double>(p.y()), static_cast<double>(p.x()),
+                                                      static_cast<double>(q.y()), static_cast<double>(q.x()));
       azimuth_[i] = to_0_2pi(a[0]);
       azimuth_[i + 1] = to_0_2pi(a[1]);
     }
-    if (i < n) azimuth_[i] = to_0_2pi(atan2_fast(scan.points[i].y(), scan.points[i].x()));
+    if (i < n) {
+      azimuth_[i] = to_0_2pi(atan2_fast(static_cast<double>(scan.points[i].y()), static_cast<double>(scan.points[i].x())));
+    }
     const auto by_azimuth = [this](std::uint32_t a, std::uint32_t b) {
       return azimuth_[a] < azimuth_[b] || (azimuth_[a] == azimuth_[b] && a < b);
     };

@@ -100,7 +100,7 @@ inline double azimuth_0_2pi(const Eigen::Vector3f& p) {
 /// its half-plane, far beyond its rounding), by the azimuth itself only near
 /// the y axis or for non-finite input.
 inline bool in_rear_half(const Eigen::Vector3f& p) {
-  const double x = p.x();
+  const auto x = static_cast<double>(p.x());
   const double ax = std::abs(x);
   if (ax > 1e-6 * std::abs(static_cast<double>(p.y()))) return x < 0.0;
   const double a = azimuth_0_2pi(p);
@@ -189,8 +189,8 @@ inline RingReport infer_rings(Scan& scan, const SensorModel& sensor, const RingC
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const Eigen::Vector3f& p = scan.points[i];
     // Float coordinates square exactly in double: no hypot needed.
-    const double x = p.x();
-    const double y = p.y();
+    const auto x = static_cast<double>(p.x());
+    const auto y = static_cast<double>(p.y());
     scan.rings[i] = sensor.nearest_ring(atan2_fast(static_cast<double>(p.z()), std::sqrt(x * x + y * y)));
   }
   report.used = RingMethod::kElevation;
@@ -266,9 +266,9 @@ inline void correct_kitti_vertical_angle(Scan& scan, double angle_rad = kKittiVe
   for (; i + 1 < pts.size(); i += 2) {
     Eigen::Vector3f& p = pts[i];
     Eigen::Vector3f& q = pts[i + 1];
-    const __m128d x = _mm_set_pd(q.x(), p.x());
-    const __m128d y = _mm_set_pd(q.y(), p.y());
-    const __m128d z = _mm_set_pd(q.z(), p.z());
+    const __m128d x = _mm_set_pd(static_cast<double>(q.x()), static_cast<double>(p.x()));
+    const __m128d y = _mm_set_pd(static_cast<double>(q.y()), static_cast<double>(p.y()));
+    const __m128d z = _mm_set_pd(static_cast<double>(q.z()), static_cast<double>(p.z()));
     const __m128d h = _mm_sqrt_pd(_mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)));
     if (_mm_movemask_pd(_mm_cmpgt_pd(h, _mm_setzero_pd())) != 3) {  // a point on the z axis (or NaN)
       p = correct_vertical_angle(p, c, s);

@@ -29,6 +29,11 @@ struct LoamResiduals {
   SurfaceResidual surface;  ///< residual of surface features (point-to-plane)
 };
 
+/// Deduces LoamResiduals{corner, surface} (aggregate CTAD is C++20, but
+/// clang before 17 does not implement it).
+template <typename CornerResidual, typename SurfaceResidual>
+LoamResiduals(CornerResidual, SurfaceResidual) -> LoamResiduals<CornerResidual, SurfaceResidual>;
+
 /// How often the i-th nearest candidate (i = 1..15) was used (eq. 23).
 using RankHistogram = std::array<std::uint64_t, 16>;
 

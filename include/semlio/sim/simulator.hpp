@@ -257,7 +257,7 @@ class Simulator {
       const Eigen::Vector3d x = origin + hit.t_m * ray.dir;
       const double cos_inc = std::abs(surface_normal(*prim, x, origin).dot(ray.dir));
       const std::uint64_t key = hash_keys(config_.seed, frame, static_cast<std::uint64_t>(r), static_cast<std::uint64_t>(c));
-      const ReturnModel m = lidar_.measure(hit.t_m, cos_inc, prim->surface.reflectivity, key);
+      const ReturnModel m = lidar_.measure(hit.t_m, cos_inc, static_cast<double>(prim->surface.reflectivity), key);
       if (!m.keep) continue;
       Cell& cell = cells[static_cast<std::size_t>(r) * static_cast<std::size_t>(cols) + static_cast<std::size_t>(c)];
       cell.p = (d_lidar * m.range_m).cast<float>();

@@ -69,7 +69,7 @@ inline void append_actor(ActorKind kind, const SE3d& T_world_body, std::uint16_t
   const Eigen::Matrix3d R = T_world_body.rotation();
   const auto at = [&](double x, double y, double z) { return T_world_body * Eigen::Vector3d(x, y, z); };
   const auto box = [&](const Eigen::Vector3d& c, const Eigen::Vector3d& half, std::uint16_t raw_id) {
-    out.push_back(make_box(c, half, R, WorldBuilder::surface(raw_id, instance, refl_scale)));
+    out.push_back(make_box(c, half, R, WorldBuilder::surface(raw_id, instance, static_cast<double>(refl_scale))));
   };
   switch (kind) {
     case ActorKind::kCar:
@@ -84,14 +84,14 @@ inline void append_actor(ActorKind kind, const SE3d& T_world_body, std::uint16_t
       box(at(0.0, 0.0, 0.62), {0.85, 0.06, 0.32}, raw::kMovingBicyclist);
       box(at(-0.1, 0.0, 1.3), {0.2, 0.2, 0.35}, raw::kMovingBicyclist);
       out.push_back(make_ellipsoid(at(-0.05, 0.0, 1.78), {0.11, 0.11, 0.13},
-                                   WorldBuilder::surface(raw::kMovingBicyclist, instance, refl_scale)));
+                                   WorldBuilder::surface(raw::kMovingBicyclist, instance, static_cast<double>(refl_scale))));
       break;
     }
     case ActorKind::kPedestrian: {
       out.push_back(make_cylinder(at(0.0, 0.0, 0.0), 0.2, 1.5,
-                                  WorldBuilder::surface(raw::kMovingPerson, instance, refl_scale)));
+                                  WorldBuilder::surface(raw::kMovingPerson, instance, static_cast<double>(refl_scale))));
       out.push_back(make_ellipsoid(at(0.0, 0.0, 1.62), {0.1, 0.1, 0.12},
-                                   WorldBuilder::surface(raw::kMovingPerson, instance, refl_scale)));
+                                   WorldBuilder::surface(raw::kMovingPerson, instance, static_cast<double>(refl_scale))));
       break;
     }
   }

@@ -41,9 +41,9 @@ inline ScanStats scan_stats(const semlio::Scan& scan) {
   std::size_t ground = 0;
   for (std::size_t i = 0; i < scan.size(); ++i) {
     const Eigen::Vector3f& p = scan.points[i];
-    const double x = p.x();
-    const double y = p.y();
-    const double z = p.z();
+    const auto x = static_cast<double>(p.x());
+    const auto y = static_cast<double>(p.y());
+    const auto z = static_cast<double>(p.z());
     const double r = std::sqrt(x * x + y * y + z * z);
     const double el = std::atan2(z, std::hypot(x, y)) * 180.0 / std::numbers::pi;
     std::size_t best = 0;
