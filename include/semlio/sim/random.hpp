@@ -6,6 +6,12 @@
 /// implementation-defined. Per-ray noise uses a counter-based hash
 /// (splitmix64 finaliser) of (seed, frame, ring, column), so results do not
 /// depend on the order or the thread in which rays are cast.
+///
+/// One rule for callers: never make two draws from one Rng as arguments of
+/// the same call. The order in which a call's arguments are evaluated is
+/// unspecified (GCC goes right to left, clang left to right), so such a
+/// call builds a different world per compiler; draw into named values
+/// first (the worlds do so in GCC's order, which kept earlier drives).
 
 #include <cmath>
 #include <cstdint>

@@ -355,10 +355,7 @@ inline World make_strip_world(const WorldConfig& config) {
         const double l = side * (road_edge + rng.uniform(18.0, 35.0));
         const Eigen::Vector3d g = place(i, l);
         const double bh = rng.uniform(5.0, 9.0);
-        // Draws go through named values wherever a call takes two: the order in
-        // which a call's arguments are evaluated is unspecified (GCC goes right
-        // to left, clang left to right), and the drives must not depend on the
-        // compiler. The order here is GCC's, so drives stay what they were.
+        // Named draws, in GCC's former argument order (sim/random.hpp).
         const double reflectivity = rng.uniform(0.7, 1.3);
         const std::uint16_t instance = wb.new_instance();
         const double yaw_jitter = rng.uniform(-0.3, 0.3);
@@ -395,7 +392,7 @@ inline World make_strip_world(const WorldConfig& config) {
       if (i % 24 == 0 && clear(i, 0.0)) wb.pole(place(i, 0.0), 10.0, 0.15);
       if (rng.chance(0.08)) {
         const double side = rng.chance(0.5) ? 1.0 : -1.0;
-        const double scale = rng.uniform(1.0, 1.6);  // named draws: see the house above
+        const double scale = rng.uniform(1.0, 1.6);  // named draws (sim/random.hpp)
         const double offset = rng.uniform(15.0, 80.0);
         wb.tree(place(i, side * (road_edge + offset)), rng, scale);
       }

@@ -118,10 +118,7 @@ inline void urban_block(WorldBuilder& wb, Rng& rng, double x0, double y0, double
     // Sidewalk furniture: street lights, trees, a sign near the corner.
     const double curb_out = sw;  // curb line, measured outward from the interior edge
     for (double a = rng.uniform(5.0, 15.0); a < s.length - 3.0; a += rng.uniform(25.0, 35.0)) {
-      // Draws go through named values wherever a call takes two: the order in
-      // which a call's arguments are evaluated is unspecified (GCC goes right
-      // to left, clang left to right), and the drives must not depend on the
-      // compiler. The order here is GCC's, so drives stay what they were.
+      // Named draws, in GCC's former argument order (sim/random.hpp).
       const double radius_m = rng.uniform(0.08, 0.14);
       const double height_m = rng.uniform(6.5, 8.5);
       wb.pole(at(a, curb_out - 0.5, kCurb), height_m, radius_m);
@@ -142,7 +139,7 @@ inline void urban_block(WorldBuilder& wb, Rng& rng, double x0, double y0, double
       for (double a = 4.0; a < s.length - 4.0; a += 6.0) {
         if (!rng.chance(0.45)) continue;
         const double flip = rng.chance(0.5) ? 0.0 : std::numbers::pi;
-        const double yaw_jitter = rng.uniform(-0.04, 0.04);  // named draws: see the poles above
+        const double yaw_jitter = rng.uniform(-0.04, 0.04);  // named draws (sim/random.hpp)
         const double out_jitter = rng.uniform(-0.15, 0.15);
         const double along_jitter = rng.uniform(-0.4, 0.4);
         wb.parked_car(at(a + along_jitter, curb_out + 1.25 + out_jitter, 0.003), yaw + flip + yaw_jitter, rng);
@@ -153,7 +150,7 @@ inline void urban_block(WorldBuilder& wb, Rng& rng, double x0, double y0, double
   if (park) {
     const int trees = static_cast<int>(w * h / 160.0);
     for (int k = 0; k < trees; ++k) {
-      const double scale = rng.uniform(0.9, 1.5);  // named draws: see the poles above
+      const double scale = rng.uniform(0.9, 1.5);  // named draws (sim/random.hpp)
       const double x = rng.uniform(x0 + 2.0, x1 - 2.0);
       const double y = rng.uniform(y0 + 2.0, y1 - 2.0);
       wb.tree({x, y, kCurb}, rng, scale);
