@@ -69,7 +69,7 @@ def row(sel, name):
         return f"  {name:13s} n=  0"
     t = lambda k: np.array([f["timings_ms"][k] for f in sel])
     tot = t("total")
-    stages = " ".join(f"{k} {np.median(t(k)):6.2f}" for k in ("preprocess", "segment", "features", "solve", "map"))
+    stages = " ".join(f"{k} {np.median(t(k)):6.2f}" for k in ("preprocess", "segment", "features", "solve", "scan_shapes", "associate", "linearize", "map"))
     return f"  {name:13s} n={len(sel):3d} wall median {np.median(tot):7.2f} p90 {np.percentile(tot, 90):7.2f} ms | median {stages}"
 kf = [f for f in frames if f.get("keyframe")]
 nkf = [f for f in frames if not f.get("keyframe")]

@@ -7,8 +7,9 @@
 // Prints one line per frame: index keyframe wall_ms cpu_ms solve_ms map_ms
 // features_ms preprocess_ms iterations, then diagnostics of the surface map:
 // map points, axes fitted so far on this map build, and the surface
-// association's NearestCache hits and refills so far -- nothing else (the
-// script summarises).
+// association's NearestCache hits and refills so far, then the solve's split:
+// scan_shapes_ms associate_ms linearize_ms -- nothing else (the script
+// summarises).
 #include <time.h>
 
 #include <chrono>
@@ -44,9 +45,10 @@ void run(Odometry odom, const std::vector<semlio::Scan>& scans, std::size_t repe
       const double cpu = thread_cpu_ms() - c0;
       const semlio::FeatureMap& surfaces = o.local_map().surfaces();
       const semlio::NearestCache& cache = o.problem().surface_cache();
-      std::printf("%zu %d %.4f %.4f %.4f %.4f %.4f %.4f %d %zu %zu %zu %zu\n", i, rep.keyframe ? 1 : 0, wall, cpu,
-                  rep.timings.solve_ms, rep.timings.map_ms, rep.timings.features_ms, rep.timings.preprocess_ms,
-                  rep.solve.iterations, surfaces.size(), surfaces.fitted_axes(), cache.hits(), cache.refills());
+      std::printf("%zu %d %.4f %.4f %.4f %.4f %.4f %.4f %d %zu %zu %zu %zu %.4f %.4f %.4f\n", i, rep.keyframe ? 1 : 0,
+                  wall, cpu, rep.timings.solve_ms, rep.timings.map_ms, rep.timings.features_ms,
+                  rep.timings.preprocess_ms, rep.solve.iterations, surfaces.size(), surfaces.fitted_axes(), cache.hits(),
+                  cache.refills(), rep.timings.scan_shapes_ms, rep.timings.associate_ms, rep.timings.linearize_ms);
     }
   }
 }

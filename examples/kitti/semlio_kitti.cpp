@@ -363,7 +363,8 @@ RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::v
 void write_timings(semlio_examples::JsonWriter& j, const semlio::StageTimings& t) {
   j.key("timings_ms").begin_object();
   j.field("preprocess", t.preprocess_ms).field("segment", t.segment_ms).field("features", t.features_ms);
-  j.field("solve", t.solve_ms).field("keyframe", t.keyframe_ms).field("map", t.map_ms).field("total", t.total_ms);
+  j.field("solve", t.solve_ms).field("scan_shapes", t.scan_shapes_ms).field("associate", t.associate_ms);
+  j.field("linearize", t.linearize_ms).field("keyframe", t.keyframe_ms).field("map", t.map_ms).field("total", t.total_ms);
   j.end_object();
 }
 

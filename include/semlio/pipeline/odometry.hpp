@@ -79,7 +79,10 @@ struct StageTimings {
   double preprocess_ms = 0.0;  ///< deskew, preprocess, rings, vertical correction
   double segment_ms = 0.0;     ///< segmenter
   double features_ms = 0.0;    ///< eq. 2 features
-  double solve_ms = 0.0;       ///< association + Gauss-Newton
+  double solve_ms = 0.0;       ///< association + Gauss-Newton (the three below and the solver's own work)
+  double scan_shapes_ms = 0.0; ///< part of solve: the associators' per-frame work on the features (scan trees, scan axes)
+  double associate_ms = 0.0;   ///< part of solve: every association (Algorithm 1 or k-NN), all iterations
+  double linearize_ms = 0.0;   ///< part of solve: residuals and normal equations, all iterations
   double keyframe_ms = 0.0;    ///< keyframe decision
   double map_ms = 0.0;         ///< local map update (keyframes only)
   double total_ms = 0.0;       ///< whole frame
@@ -239,6 +242,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     // 5-7. Associate (Algorithm 1) and solve eq. 13 by Gauss-Newton.
     t = Clock::now();
     SE3d T = T_pred;
+    problem_.reset_timings();
     problem_.set_features(features_.corners, features_.surfaces);
     // The weak-direction reset only with a measured prior (see process()).
     GaussNewtonConfig solver = config_.solver;
@@ -257,6 +261,9 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     report.corner_matches = cm;
     report.surface_matches = sm;
     report.timings.solve_ms = ms_since(t);
+    report.timings.scan_shapes_ms = problem_.timings().scan_shapes_ms;
+    report.timings.associate_ms = problem_.timings().associate_ms;
+    report.timings.linearize_ms = problem_.timings().linearize_ms;
     if (!report.solve.ok()) {
       report.status = OdometryStatus::kSolverFailed;
       accept(report, T_pred, scan.stamp_s, /*tracked=*/false);
