@@ -9,6 +9,7 @@
 #include <semlio/core/labels.hpp>
 #include <semlio/core/logger.hpp>
 #include <semlio/core/scan.hpp>
+#include <semlio/core/stopwatch.hpp>
 #include <semlio/lie/se3.hpp>
 #include <semlio/lie/so3.hpp>
 

@@ -7,12 +7,12 @@
 /// LoopConstraint for the pose graph (a between-factor).
 
 #include <algorithm>
-#include <chrono>
 #include <cstddef>
 #include <optional>
 #include <utility>
 #include <vector>
 
+#include <semlio/core/stopwatch.hpp>
 #include <semlio/loop/loop_detector.hpp>
 #include <semlio/loop/loop_keyframe.hpp>
 #include <semlio/loop/loop_verifier.hpp>
@@ -70,9 +70,9 @@ class LoopCloser {
     ++stats_.queries;
     last_.clear();
     if (keyframes.size() < 2) return std::nullopt;
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = StageClock::now();
     detector_.detect(keyframes, candidates_);
-    stats_.detect_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    stats_.detect_ms += ms_since(t0);
     stats_.candidates += candidates_.size();
     const std::size_t query = keyframes.size() - 1;
     const std::size_t n = std::min(candidates_.size(), config_.max_verifications);

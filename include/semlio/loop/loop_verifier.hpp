@@ -44,7 +44,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -53,6 +52,7 @@
 
 #include <semlio/associate/scan_shapes.hpp>
 #include <semlio/concepts.hpp>
+#include <semlio/core/stopwatch.hpp>
 #include <semlio/features/loam_features.hpp>
 #include <semlio/lie/se3.hpp>
 #include <semlio/loop/loop_keyframe.hpp>
@@ -296,13 +296,13 @@ inline double keyframe_path_length(const std::vector<LoopKeyframe>& keyframes, s
 /// deterministic.
 inline LoopVerification verify_loop(const std::vector<LoopKeyframe>& keyframes, std::size_t match, std::size_t query,
                                     const SE3d& T_match_query_guess, const LoopVerifierConfig& config = {}) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = StageClock::now();
   LoopVerification out;
   out.constraint.from = match;
   out.constraint.to = query;
   const auto finish = [&](LoopVerdict v) {
     out.verdict = v;
-    out.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    out.time_ms = ms_since(t0);
     return out;
   };
   if (match >= keyframes.size() || query >= keyframes.size() || match == query) {
@@ -328,7 +328,7 @@ inline LoopVerification verify_loop(const std::vector<LoopKeyframe>& keyframes, 
   }
   out.submap_keyframes = submap.keyframe_count();
   submap.build(m.T_world_lidar.translation());
-  out.submap_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  out.submap_ms = ms_since(t0);
   if (submap.corners().empty() && submap.surfaces().empty()) return finish(LoopVerdict::kEmptySubmap);
 
   // Coarse then fine registration of T_world_query.

@@ -8,7 +8,6 @@
 /// map update. Data-dependent failures are statuses in the report; the pose
 /// then follows the prediction and is never NaN.
 
-#include <chrono>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -20,6 +19,7 @@
 #include <semlio/concepts.hpp>
 #include <semlio/core/error.hpp>
 #include <semlio/core/scan.hpp>
+#include <semlio/core/stopwatch.hpp>
 #include <semlio/features/loam_features.hpp>
 #include <semlio/features/preprocess.hpp>
 #include <semlio/features/rings.hpp>
@@ -163,11 +163,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
   /// weak direction until the LIO cannot initialise.
   FrameReport process(Scan& scan, const std::optional<SE3d>& T_map_lidar_prior = std::nullopt,
                       WeakDirectionReset reset = WeakDirectionReset::kWithPrior) {
-    using Clock = std::chrono::steady_clock;
-    const auto t0 = Clock::now();
-    auto ms_since = [](Clock::time_point a) {
-      return std::chrono::duration<double, std::milli>(Clock::now() - a).count();
-    };
+    const auto t0 = StageClock::now();
     FrameReport report;
     report.frame = frame_count_++;
     report.stamp_s = scan.stamp_s;
@@ -190,7 +186,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     }
 
     // 2. Deskew (slot), preprocessing, rings, the KITTI vertical-angle fix.
-    auto t = Clock::now();
+    auto t = StageClock::now();
     deskewer_.deskew(scan, T_last_.inverse() * T_pred);
     preprocess(scan, config_.preprocess);
     report.points = scan.size();
@@ -203,12 +199,12 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     report.timings.preprocess_ms = ms_since(t);
 
     // 3. Segment: one label per point.
-    t = Clock::now();
+    t = StageClock::now();
     segmenter_.segment(scan);
     report.timings.segment_ms = ms_since(t);
 
     // 4. Features (eq. 2).
-    t = Clock::now();
+    t = StageClock::now();
     if (!scan.empty()) {
       extractor_.extract(scan, features_);
     } else {
@@ -230,7 +226,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     if (map_.keyframe_count() == 0) {
       // The first usable frame defines the map frame.
       report.status = OdometryStatus::kInitialized;
-      t = Clock::now();
+      t = StageClock::now();
       add_keyframe(SE3d());
       report.keyframe = true;
       report.timings.map_ms = ms_since(t);
@@ -240,7 +236,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     }
 
     // 5-7. Associate (Algorithm 1) and solve eq. 13 by Gauss-Newton.
-    t = Clock::now();
+    t = StageClock::now();
     SE3d T = T_pred;
     problem_.reset_timings();
     problem_.set_features(features_.corners, features_.surfaces);
@@ -283,7 +279,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     report.status = report.solve.degenerate() ? OdometryStatus::kDegenerate : OdometryStatus::kTracked;
 
     // 8. Keyframe decision (Algorithm 2).
-    t = Clock::now();
+    t = StageClock::now();
     KeyframeEvidence evidence;
     evidence.T_lastkf_current = T_lastkf_.inverse() * T;
     evidence.elapsed_s = scan.stamp_s - lastkf_stamp_s_;
@@ -307,7 +303,7 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
 
     // 9. Map update, on keyframes only.
     if (report.keyframe) {
-      t = Clock::now();
+      t = StageClock::now();
       add_keyframe(T);
       lastkf_stamp_s_ = scan.stamp_s;
       report.timings.map_ms = ms_since(t);

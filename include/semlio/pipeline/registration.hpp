@@ -6,11 +6,11 @@
 /// it by Gauss-Newton with re-association (paper §3.1). Usable for
 /// scan-to-scan alignment and as the loop-closure verifier.
 
-#include <chrono>
 #include <cstddef>
 
 #include <semlio/concepts.hpp>
 #include <semlio/core/scan.hpp>
+#include <semlio/core/stopwatch.hpp>
 #include <semlio/features/loam_features.hpp>
 #include <semlio/features/preprocess.hpp>
 #include <semlio/features/rings.hpp>
@@ -78,7 +78,7 @@ template <typename A, Residual RC, Residual RS>
   requires Associator<A, FeatureMap>
 RegistrationResult register_scan(Scan& source, Scan& target, const SE3d& T_init, const A& associator,
                                  const LoamResiduals<RC, RS>& residuals, const RegistrationConfig& config = {}) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = StageClock::now();
   RegistrationResult result;
   result.T_target_source = T_init;
 
@@ -106,7 +106,7 @@ RegistrationResult register_scan(Scan& source, Scan& target, const SE3d& T_init,
   const auto [cm, sm] = problem.matched_counts();
   result.corner_matches = cm;
   result.surface_matches = sm;
-  result.time_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  result.time_ms = ms_since(t0);
   return result;
 }
 

@@ -8,12 +8,12 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cstddef>
 #include <cstdint>
 #include <utility>
 
 #include <semlio/concepts.hpp>
+#include <semlio/core/stopwatch.hpp>
 #include <semlio/features/loam_features.hpp>
 #include <semlio/map/feature_map.hpp>
 #include <semlio/map/feature_terms.hpp>
@@ -82,7 +82,7 @@ class ScanToMapProblem {
   /// Binds this frame's features (scan frame; labels empty or one per point).
   /// Call once per frame.
   void set_features(const FeatureCloud& corners, const FeatureCloud& surfaces) {
-    const auto t0 = Clock::now();
+    const auto t0 = StageClock::now();
     corners_ = &corners;
     surfaces_ = &surfaces;
     corner_assoc_.set_scan(corners.points);
@@ -94,7 +94,7 @@ class ScanToMapProblem {
   /// associate(T, out, NearestCache&) reuse each feature's candidate list
   /// across calls (exact: the same matches, fewer k-d tree searches).
   void associate(const SE3d& T_map_scan) {
-    const auto t0 = Clock::now();
+    const auto t0 = StageClock::now();
     if constexpr (requires(const A& a, Correspondences& out, NearestCache& cache) {
                     a.associate(T_map_scan, out, cache);
                   }) {
@@ -113,7 +113,7 @@ class ScanToMapProblem {
   /// features whose matches did not change since the last call: the same
   /// terms, bit for bit. Not safe to call concurrently on one problem.
   void linearize(const SE3d& T_map_scan, NormalEquations& eq) const {
-    const auto t0 = Clock::now();
+    const auto t0 = StageClock::now();
     accumulate(*corners_, corner_matches_, *corner_map_, residuals_.corner, corner_fits_, T_map_scan, eq);
     accumulate(*surfaces_, surface_matches_, *surface_map_, residuals_.surface, surface_fits_, T_map_scan, eq);
     timings_.linearize_ms += ms_since(t0);
@@ -162,11 +162,6 @@ class ScanToMapProblem {
     } else {
       accumulate_feature_terms(features, matches, map, residual, T_map_scan, eq);
     }
-  }
-
-  using Clock = std::chrono::steady_clock;
-  static double ms_since(Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   }
 
   static std::size_t count_matched(const Correspondences& c) noexcept {

@@ -193,7 +193,6 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <concepts>
 #include <cstddef>
@@ -207,6 +206,7 @@
 
 #include <semlio/core/error.hpp>
 #include <semlio/core/scan.hpp>
+#include <semlio/core/stopwatch.hpp>
 #include <semlio/features/loam_features.hpp>
 #include <semlio/graph/keyframe_inertial_graph.hpp>
 #include <semlio/graph/pose_graph.hpp>
@@ -420,7 +420,6 @@ class Slam {
   /// buffer). `T_world_lidar_prior`, when given, is a pose prior in the world
   /// (graph) frame; it is mapped into the odometry frame for the front end.
   SlamFrameReport process(Scan& scan, const std::optional<SE3d>& T_world_lidar_prior = std::nullopt) {
-    using Clock = std::chrono::steady_clock;
     SlamFrameReport out;
     std::optional<SE3d> prior_odom;
     if (T_world_lidar_prior && T_world_lidar_prior->matrix().allFinite()) {
@@ -428,7 +427,7 @@ class Slam {
                                   : *T_world_lidar_prior;
     }
     out.odometry = odometry_.process(scan, prior_odom);
-    const auto t0 = Clock::now();
+    const auto t0 = StageClock::now();
     SE3d T_odom = out.odometry.T_map_lidar;
     if (!T_odom.matrix().allFinite()) T_odom = odom_poses_.empty() ? SE3d() : odom_poses_.back();
     failed_since_keyframe_ = failed_since_keyframe_ || detail::prediction_only(out.odometry.status);
@@ -447,7 +446,7 @@ class Slam {
       frame_rel_.push_back(T_odom);
     }
     out.T_world_lidar = world_pose(frames() - 1);
-    out.backend_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    out.backend_ms = ms_since(t0);
     out.total_ms = out.odometry.timings.total_ms + out.backend_ms;
     return out;
   }
@@ -735,9 +734,9 @@ class Slam {
 
     // Graph update: window, or a warm-started full solve after a loop.
     const bool full = graph_.full_solve_pending();
-    const auto t = std::chrono::steady_clock::now();
+    const auto t = StageClock::now();
     const GraphSolveReport report = graph_.update();
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+    const double ms = ms_since(t);
     graph_ms_ += ms;
     if (full) graph_full_ms_ += ms;
     out.graph = report;
