@@ -488,11 +488,16 @@ class LocalMap {
       detail::sort_by_voxel_key(m.fresh, m.fresh_scratch, m.counts);
       // Growing a map-sized vector copies it into fresh pages; while the map
       // grows that happened on 176 of 428 builds of the main job's drive and
-      // cost ~5 ms each (page faults, the copy). An eighth of headroom leaves
+      // cost ~5 ms each (page faults, the copy). An eighth of headroom left
       // 40 and still no doubled capacity at rest (so not reserve_with_headroom's
-      // 1.5x step: this buffer is map-sized).
+      // 1.5x step: this buffer is map-sized). But a young map grows by more
+      // than an eighth per keyframe: on the KITTI snippet 18 of 20 builds
+      // still reallocated, 0.2-1.2 ms each. Room for four more keyframes like
+      // this one as well: 6 of 20 there, 23 of 424 on the drive, the same
+      // eighth at rest (full preset, bench_frame_time: map stage 2.43 -> 2.05
+      // ms median on keyframes, README frame time).
       const std::size_t needed = m.entries.size() + m.fresh.size();
-      if (m.entries.capacity() < needed) m.entries.reserve(needed + needed / 8);
+      if (m.entries.capacity() < needed) m.entries.reserve(needed + std::max(needed / 8, 4 * m.fresh.size()));
       detail::merge_sorted_entries(m.entries, m.fresh);
     } else {
       m.entries.clear();
