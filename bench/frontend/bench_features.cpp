@@ -102,6 +102,25 @@ void BM_VoxelDownsample_KittiScan(benchmark::State& state) {
 }
 BENCHMARK(BM_VoxelDownsample_KittiScan)->Arg(20)->Arg(40)->Arg(100)->Unit(benchmark::kMillisecond);
 
+// The same with a label per point, all one class: what the odometry's surface
+// voxels see without a segmenter (NoLabels), where every voxel holds one label.
+void BM_VoxelDownsample_KittiScanOneLabel(benchmark::State& state) {
+  const semlio::Scan& scan = kitti_scan();
+  const double leaf_m = static_cast<double>(state.range(0)) / 100.0;
+  semlio::VoxelGrid grid({.leaf_size_m = leaf_m});
+  const std::vector<semlio::Class> in_labels(scan.size(), semlio::Class::kUnlabeled);
+  std::vector<Eigen::Vector3f> out;
+  std::vector<semlio::Class> labels;
+  std::vector<std::uint32_t> first;
+  for (auto _ : state) {
+    grid.downsample(scan.points, in_labels, out, labels, first);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.counters["voxels"] = static_cast<double>(out.size());
+  set_points(state, scan.size());
+}
+BENCHMARK(BM_VoxelDownsample_KittiScanOneLabel)->Arg(40)->Unit(benchmark::kMillisecond);
+
 void BM_KdTreeBuild_KittiScan(benchmark::State& state) {
   const semlio::Scan& scan = kitti_scan();
   semlio::KdTree3f tree;

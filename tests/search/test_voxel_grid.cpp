@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -250,8 +251,18 @@ TEST_CASE("VoxelGrid equals the literal downsampling bit for bit, in ring order,
   for (const char* name : {"000000.bin", "000001.bin"}) {
     const semlio::Scan scan =
         semlio::io::read_kitti_bin(semlio_test::data_path(std::string("kitti/sequences/00/velodyne/") + name));
-    std::vector<Class> labels(scan.size());
-    for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<Class>((i * 7 + i / 13) % 5);
+    // Labels: mixed in nearly every voxel; one label for all (a scan without
+    // a segmenter); and by region, in bands of 0.3 m across the 0.4 m voxels,
+    // so that most voxels hold one label and the others turn mixed part-way,
+    // often after several points of their first label.
+    std::vector<Class> mixed(scan.size());
+    for (std::size_t i = 0; i < mixed.size(); ++i) mixed[i] = static_cast<Class>((i * 7 + i / 13) % 5);
+    const std::vector<Class> uniform(scan.size(), Class::kUnlabeled);
+    std::vector<Class> banded(scan.size());
+    for (std::size_t i = 0; i < banded.size(); ++i) {
+      const auto band = static_cast<long>(std::floor(scan.points[i].x() / 0.3F));
+      banded[i] = static_cast<Class>(((band % 4) + 4) % 4 + 1);
+    }
     std::vector<std::uint32_t> all(scan.size());
     for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
     std::vector<std::uint32_t> shuffled = all;
@@ -260,9 +271,10 @@ TEST_CASE("VoxelGrid equals the literal downsampling bit for bit, in ring order,
     for (std::uint32_t i = 0; i < all.size(); i += 3) every_third.push_back(i);
     semlio::VoxelGrid grid({.leaf_size_m = 0.4});
     for (const auto* subset : {&all, &shuffled, &every_third}) {
-      for (const bool labelled : {false, true}) {
-        const std::vector<Class> no_labels;
-        const std::vector<Class>& l = labelled ? labels : no_labels;
+      const std::vector<Class> no_labels;
+      const std::array<const std::vector<Class>*, 4> label_sets{&no_labels, &mixed, &uniform, &banded};
+      for (const std::vector<Class>* labels : label_sets) {
+        const std::vector<Class>& l = *labels;
         const LiteralVoxels want = literal_downsample(scan.points, l, *subset, 0.4);
         std::vector<Vector3f> got;
         std::vector<Class> got_labels;

@@ -82,9 +82,10 @@ class VoxelGrid {
   void downsample(const std::vector<Eigen::Vector3f>& pts, const std::vector<Class>& labels,
                   std::vector<Eigen::Vector3f>& out_pts, std::vector<Class>& out_labels,
                   std::vector<std::uint32_t>& out_first_idx) {
+    check_labels(pts, labels);
     begin(pts.size());
-    const bool labelled = !labels.empty();
-    for (std::uint32_t i = 0; i < pts.size(); ++i) push(pts, i, labelled);
+    const Class* l = labels.empty() ? nullptr : labels.data();
+    for (std::uint32_t i = 0; i < pts.size(); ++i) push(pts, i, l);
     finish(pts, labels, out_pts, out_labels, out_first_idx);
   }
 
@@ -93,9 +94,10 @@ class VoxelGrid {
   void downsample(const std::vector<Eigen::Vector3f>& pts, const std::vector<Class>& labels,
                   const std::vector<std::uint32_t>& subset, std::vector<Eigen::Vector3f>& out_pts,
                   std::vector<Class>& out_labels, std::vector<std::uint32_t>& out_first_idx) {
+    check_labels(pts, labels);
     begin(subset.size());
-    const bool labelled = !labels.empty();
-    for (const std::uint32_t i : subset) push(pts, i, labelled);
+    const Class* l = labels.empty() ? nullptr : labels.data();
+    for (const std::uint32_t i : subset) push(pts, i, l);
     finish(pts, labels, out_pts, out_labels, out_first_idx);
   }
 
@@ -110,7 +112,17 @@ class VoxelGrid {
     std::uint64_t key;  // for grow()
     std::uint32_t count;
     std::uint32_t first;
+    std::uint32_t before_mixed = 0;  // points (all of `label`) before its first other label
+    Class label = Class::kUnlabeled;  // its first point's label
+    bool mixed = false;              // it holds more than one label (entries recorded since)
   };
+
+  static void check_labels(const std::vector<Eigen::Vector3f>& pts, const std::vector<Class>& labels) {
+    if (!labels.empty() && labels.size() != pts.size()) {
+      throw ValueError("VoxelGrid: labels has " + std::to_string(labels.size()) +
+                       " entries but there are " + std::to_string(pts.size()) + " points");
+    }
+  }
 
   /// Forgets the previous call (by a new stamp rather than by clearing) and
   /// sizes the hash table for the voxels the last call found, not for the n
@@ -153,9 +165,10 @@ class VoxelGrid {
     for (std::uint32_t c = 0; c < cells_.size(); ++c) table_[probe(cells_[c].key)] = Slot{cells_[c].key, c, stamp_};
   }
 
-  /// Adds point i to its voxel (open addressing, linear probing); records
-  /// the (point, voxel) entry only when finish() needs it for the labels.
-  void push(const std::vector<Eigen::Vector3f>& pts, std::uint32_t i, bool labelled) {
+  /// Adds point i to its voxel (open addressing, linear probing); with
+  /// labels (non-null), records the (point, voxel) entry only when finish()
+  /// needs it for the voxel's majority: once the voxel holds a second label.
+  void push(const std::vector<Eigen::Vector3f>& pts, std::uint32_t i, const Class* labels) {
     const Eigen::Vector3f& p = pts[i];
     if (!p.allFinite()) return;
     const std::uint64_t key = voxel_key(p, inv_leaf_);
@@ -170,16 +183,28 @@ class VoxelGrid {
       } else {
         last_cell_ = static_cast<std::uint32_t>(cells_.size());
         table_[slot] = Slot{key, last_cell_, stamp_};
-        cells_.push_back(Cell{p.cast<double>(), key, 1, i});
+        cells_.push_back(Cell{p.cast<double>(), key, 1, i, 0, labels != nullptr ? labels[i] : Class::kUnlabeled});
         if (2 * cells_.size() > mask_ + 1) grow();
+        return;
       }
     } else {
       add(cells_[last_cell_], p, i);
     }
-    if (labelled) {
-      entry_idx_.push_back(i);
-      entry_cell_.push_back(last_cell_);
+    if (labels == nullptr) return;
+    // Most voxels hold one label (all of them without a segmenter): they need
+    // no entries, their majority is that label. A voxel's entries start at its
+    // first other label; the points before it are counted in before_mixed.
+    // (Recording every point's entry and counting every voxel was a quarter
+    // of a one-label scan's downsampling: BM_VoxelDownsample_KittiScanOneLabel
+    // 3.02 -> 2.20 ms, three alternated runs.)
+    Cell& c = cells_[last_cell_];
+    if (!c.mixed && labels[i] == c.label) return;
+    if (!c.mixed) {
+      c.mixed = true;
+      c.before_mixed = c.count - 1;  // add() counted this point already
     }
+    entry_idx_.push_back(i);
+    entry_cell_.push_back(last_cell_);
   }
 
   // One more point (index i) in voxel c: its sum, count and first index.
@@ -192,23 +217,29 @@ class VoxelGrid {
   void finish(const std::vector<Eigen::Vector3f>& pts, const std::vector<Class>& labels,
               std::vector<Eigen::Vector3f>& out_pts, std::vector<Class>& out_labels,
               std::vector<std::uint32_t>& out_first_idx) {
-    if (!labels.empty() && labels.size() != pts.size()) {
-      throw ValueError("VoxelGrid: labels has " + std::to_string(labels.size()) +
-                       " entries but there are " + std::to_string(pts.size()) + " points");
-    }
     const std::size_t nc = cells_.size();
     expected_cells_ = nc;
-    // Majority label per voxel: group entries by cell (counting sort), count.
+    // Majority label per voxel: a voxel of one label has it; the entries of
+    // mixed voxels are grouped by cell (counting sort) and counted, on top of
+    // the points before each one's first other label.
     cell_label_.clear();
     if (!labels.empty()) {
-      offset_.assign(nc + 1, 0);
-      for (const std::uint32_t c : entry_cell_) ++offset_[c + 1];
-      for (std::size_t c = 0; c < nc; ++c) offset_[c + 1] += offset_[c];
-      grouped_.resize(entry_idx_.size());
-      cursor_.assign(offset_.begin(), offset_.end() - 1);
-      for (std::size_t e = 0; e < entry_idx_.size(); ++e) grouped_[cursor_[entry_cell_[e]]++] = entry_idx_[e];
+      if (!entry_cell_.empty()) {
+        offset_.assign(nc + 1, 0);
+        for (const std::uint32_t c : entry_cell_) ++offset_[c + 1];
+        for (std::size_t c = 0; c < nc; ++c) offset_[c + 1] += offset_[c];
+        grouped_.resize(entry_idx_.size());
+        cursor_.assign(offset_.begin(), offset_.end() - 1);
+        for (std::size_t e = 0; e < entry_idx_.size(); ++e) grouped_[cursor_[entry_cell_[e]]++] = entry_idx_[e];
+      }
       for (std::size_t c = 0; c < nc; ++c) {
+        const Cell& cell = cells_[c];
+        if (!cell.mixed) {
+          cell_label_.push_back(cell.label);
+          continue;
+        }
         counts_.fill(0);
+        counts_[static_cast<std::size_t>(cell.label)] = cell.before_mixed;
         for (std::size_t k = offset_[c]; k < offset_[c + 1]; ++k) {
           ++counts_[static_cast<std::size_t>(labels[grouped_[k]])];
         }
