@@ -177,6 +177,18 @@ TEST_CASE("Scan: label_histogram counts points per learning class", "[core]") {
   std::uint32_t total = 0;
   for (const auto v : h) total += v;
   CHECK(total == 50);
+  // Every length's tail (the counts are kept in four parts), against one counter.
+  for (std::size_t n = 0; n < 11; ++n) {
+    Scan t;
+    semlio::LabelHistogram want{};
+    for (std::size_t i = 0; i < n; ++i) {
+      const Class c = i % 3 == 0 ? Class::kCar : (i % 3 == 1 ? Class::kRoad : Class::kPole);
+      t.points.emplace_back(0.0F, 0.0F, 0.0F);
+      t.labels.push_back(c);
+      ++want[static_cast<std::size_t>(semlio::index(c))];
+    }
+    CHECK(semlio::label_histogram(t) == want);
+  }
   // No labels: all zeros.
   Scan unlabeled;
   unlabeled.points.assign(4, semlio::Point3f::Zero());
