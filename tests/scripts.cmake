@@ -41,12 +41,16 @@ set_tests_properties(semlio_kitti_bad_scans PROPERTIES LABELS examples TIMEOUT 3
 # Short versions of the speed and must-hold scripts the issues name. Each run
 # must complete and print its table; REPORT_ONLY=1 where a short run cannot
 # decide the must-hold (the README's numbers come from the long runs).
-# Association kernel ratios (issue #4) with a tiny measuring time.
-semlio_add_script_test(bench_association ${SEMLIO_BASH} scripts/bench_association.sh --benchmark_min_time=0.01)
-set_tests_properties(script_bench_association PROPERTIES FAIL_REGULAR_EXPRESSION "no association rows")
-# Frame time per stage (issue #5) on the 3 real KITTI raw frames and a 12-frame drive.
-semlio_add_script_test(frame_time ${CMAKE_COMMAND} -E env FRAMES=12 ${SEMLIO_BASH} scripts/frame_time.sh
-  tests/data/kitti_raw/snippet_22)
+# These two run benchmark binaries (bench_association, bench_frame_time):
+# only in a build that has them (scripts/sanitize.sh builds none).
+if(SEMLIO_BUILD_BENCHMARKS)
+  # Association kernel ratios (issue #4) with a tiny measuring time.
+  semlio_add_script_test(bench_association ${SEMLIO_BASH} scripts/bench_association.sh --benchmark_min_time=0.01)
+  set_tests_properties(script_bench_association PROPERTIES FAIL_REGULAR_EXPRESSION "no association rows")
+  # Frame time per stage (issue #5) on the 3 real KITTI raw frames and a 12-frame drive.
+  semlio_add_script_test(frame_time ${CMAKE_COMMAND} -E env FRAMES=12 ${SEMLIO_BASH} scripts/frame_time.sh
+    tests/data/kitti_raw/snippet_22)
+endif()
 # Frame time under settings files (issue #5's speed trade-offs), alternated,
 # on the two real KITTI scans of tests/data.
 file(WRITE "${script_out}/configs/shipped.yaml" "{}\n")
