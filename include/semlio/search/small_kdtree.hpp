@@ -239,8 +239,8 @@ class SmallKdTree3f {
     const auto self = static_cast<std::uint32_t>(nodes_.size());
     nodes_.push_back(Node{begin, end, 0, 0, 0.0F, 0});
     if (end - begin <= kLeaf) return self;
-    Eigen::Vector3f lo = work_[begin].p;
-    Eigen::Vector3f hi = lo;
+    Eigen::Vector3f lo;
+    Eigen::Vector3f hi;
 #if defined(SEMLIO_KDTREE_SSE2)
     {
       // The node's bounding box, four lanes at a time: an entry is 16 bytes,
@@ -277,6 +277,8 @@ class SmallKdTree3f {
       hi = Eigen::Vector3f(h[0], h[1], h[2]);
     }
 #else
+    lo = work_[begin].p;
+    hi = lo;
     for (std::uint32_t i = begin + 1; i < end; ++i) {
       lo = lo.cwiseMin(work_[i].p);
       hi = hi.cwiseMax(work_[i].p);
