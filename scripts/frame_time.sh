@@ -14,7 +14,10 @@
 #      frame (CLOCK_THREAD_CPUTIME_ID) -- on a shared, loaded machine the wall
 #      time overstates the cost, the CPU time does not.
 # Environment: BUILD_DIR (build), OUT (results/frame_time), FRAMES (300), CORE (0),
+# REPEAT (3: passes of bench_frame_time over the frames, pooled into its
+# medians: a single pass of 21 frames is a small sample),
 # SKIP_BUILD=1 (use BUILD_DIR as built; CI runs a short version this way).
+# On the real snippet each preset's summary ends with issue #5's verdict on this CPU.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PCD_DIR=${1:-}
@@ -22,6 +25,7 @@ BUILD_DIR=${BUILD_DIR:-build}
 OUT=${OUT:-results/frame_time}
 FRAMES=${FRAMES:-300}
 CORE=${CORE:-0}
+REPEAT=${REPEAT:-3}
 
 scripts/install_deps.sh python3-numpy
 if [[ -z "${SKIP_BUILD:-}" ]]; then
@@ -49,6 +53,9 @@ fi
 sequences+=("sim")
 
 echo "== load before the runs: $(cut -d' ' -f1-3 /proc/loadavg) (1/5/15 min) on $(nproc) cores"
+# Absolute times depend on the CPU (the same code read 30.6 ms on a 2.3 GHz
+# Xeon VM and 20-21 ms on a 2.6 GHz EPYC VM): name it beside every number.
+echo "== cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//'), $(grep -m1 'cpu MHz' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//') MHz"
 for seq in "${sequences[@]}"; do
   labels=none
   correction=on
@@ -57,7 +64,7 @@ for seq in "${sequences[@]}"; do
     run="$OUT/run_${seq}_${preset}"
     /usr/bin/time -f "%U %S %e" -o "$run.time" taskset -c "$CORE" "$BIN/semlio_kitti" --sequence "$OUT/$seq" \
       --labels "$labels" --preset "$preset" --kitti-correction "$correction" --out "$run" --quiet > "$run.log" 2>&1
-    taskset -c "$CORE" "$BENCH" --sequence "$OUT/$seq" --preset "$preset" --labels "$labels" > "$run.cpu.txt"
+    taskset -c "$CORE" "$BENCH" --sequence "$OUT/$seq" --preset "$preset" --labels "$labels" --repeat "$REPEAT" > "$run.cpu.txt"
     /usr/bin/python3 - "$seq" "$preset" "$run/report.json" "$run.time" "$run.cpu.txt" <<'PY'
 import json, sys
 import numpy as np
@@ -78,13 +85,20 @@ print(f"== {seq} / {preset}: {len(frames)} tracked frames; semlio_kitti process:
 print(row(frames, "all frames"))
 print(row(kf, "keyframes"))
 print(row(nkf, "non-keyframes"))
-a = np.loadtxt(cpufile, ndmin=2)[1:]  # frame 0 initialises the map
+a = np.loadtxt(cpufile, ndmin=2)
+a = a[a[:, 0] != 0]  # frame 0 of each pass initialises the map
 if len(a):
     for name, m in (("all frames", np.ones(len(a), bool)), ("keyframes", a[:, 1] == 1), ("non-keyframes", a[:, 1] == 0)):
         if m.any():
             c = a[m, 3]
             print(f"  thread CPU {name:13s} median {np.median(c):7.2f} p90 {np.percentile(c, 90):7.2f} ms "
                   f"(wall of the same run: median {np.median(a[m, 2]):7.2f})")
+    if seq == "kitti_raw":
+        # Issue #5's bound, judged on the thread CPU time (the wall time of a
+        # shared machine overstates it); informational, not an exit status.
+        c = np.median(a[:, 3])
+        verdict = "holds" if c <= 30.0 else "does NOT hold"
+        print(f"  issue #5 (whole-frame median <= 30 ms, real KITTI, one core), {preset}: {c:.2f} ms -> {verdict} on this CPU")
 PY
   done
 done
