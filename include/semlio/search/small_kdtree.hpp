@@ -141,7 +141,7 @@ class SmallKdTree3f {
   std::size_t knn(const Eigen::Vector3f& q, std::size_t k, std::uint32_t* idx, float* sq_dist) const {
     if (k == 0 || empty()) return 0;
     if (k <= detail::kKBestMax) {
-      KeyResult r{detail::KBest(k), 0.0F};
+      KeyResult r(k, 0.0F);
       search<false>(q, r);
       return r.best.write(idx, sq_dist);
     }
@@ -172,7 +172,7 @@ class SmallKdTree3f {
                   float max_sq_dist) const {
     if (k == 0 || empty() || !(max_sq_dist >= 0.0F)) return 0;
     if (k <= detail::kKBestMax) {
-      KeyResult r{detail::KBest(k), max_sq_dist};
+      KeyResult r(k, max_sq_dist);
       search<true>(q, r);
       return r.best.write(idx, sq_dist);
     }
@@ -216,8 +216,13 @@ class SmallKdTree3f {
   };
 
   // The same for k <= kKBestMax, kept as keys (detail::KBest: cheaper
-  // insertions) and written out once at the end.
+  // insertions) and written out once at the end. A constructor, not
+  // aggregate initialisation: GCC 12 zero-filled the whole struct for
+  // `KeyResult r{detail::KBest(k), 0.0F}` -- 544 bytes of keys never read,
+  // on every unbounded search (`rep stos` in every 1-NN anchor and 5-NN
+  // query).
   struct KeyResult {
+    KeyResult(std::size_t k, float c) noexcept : best(k), cap(c) {}
     detail::KBest best;
     float cap;
     [[nodiscard]] bool full() const { return best.full(); }
