@@ -246,15 +246,39 @@ TEST_CASE("NormalConsistency equals the literal Algorithm 1 on simulated urban s
   require_fast_equals_reference(local.corners(), pair.scan_features.corners.points, poses, true, 0.1);
 }
 
-TEST_CASE("NormalConsistency equals the reference without candidate lists", "[associate]") {
-  // The k-d tree fallback path alone (LocalMapConfig::candidate_list = 0).
+TEST_CASE("NormalConsistency equals the reference with candidate lists", "[associate]") {
+  // The optional list path (LocalMapConfig::candidate_list > 0; off by
+  // default, the cases above search the k-d tree inside the gate): anchors
+  // from the voxel index or a 1-NN bounded at the gate, list scans stopped
+  // by the float bound, the tree where the lists cannot prove the answer.
+  const semlio::LocalMapConfig lists{.candidate_list = 32};
+  {
+    const auto query = semlio_test::kitti_features("kitti/sequences/00/velodyne/000001.bin");
+    semlio::LocalMap local(lists);
+    semlio_test::build_kitti_pair_map(local);
+    REQUIRE(local.surfaces().candidate_list() == 32);
+    REQUIRE(local.corners().candidate_list() == 32);
+    const SE3d guess = semlio_test::kitti_T_0_1();
+    const std::vector<SE3d> poses{SE3d(), guess, perturbed(guess, 0.2, 0.01)};
+    require_fast_equals_reference(local.surfaces(), query.surfaces.points, poses, true);
+    require_fast_equals_reference(local.corners(), query.corners.points, poses, true);
+  }
+  {
+    const auto pair = semlio_test::sim_urban_pair();
+    semlio::LocalMap local(lists);
+    local.add_keyframe(SE3d(), pair.map_features.corners, pair.map_features.surfaces);
+    local.build(Eigen::Vector3d::Zero());
+    const std::vector<SE3d> poses{pair.T_map_scan, perturbed(pair.T_map_scan, 0.2, 0.01), SE3d()};
+    require_fast_equals_reference(local.surfaces(), pair.scan_features.surfaces.points, poses, true);
+    require_fast_equals_reference(local.corners(), pair.scan_features.corners.points, poses, true, 0.1);
+  }
   const auto scene = semlio_test::street_scene(4);
-  semlio::LocalMap local({.candidate_list = 0});
+  semlio::LocalMap local(lists);
   local.add_keyframe(SE3d(), scene.map_corners, scene.map_surfaces);
   local.build(Eigen::Vector3d::Zero());
-  REQUIRE(local.surfaces().candidate_list() == 0);
-  require_fast_equals_reference(local.surfaces(), scene.scan_surfaces.points,
-                                {scene.T_map_scan, perturbed(scene.T_map_scan, 0.3, 0.02)}, true);
+  const std::vector<SE3d> poses{scene.T_map_scan, perturbed(scene.T_map_scan, 0.3, 0.02), SE3d()};
+  require_fast_equals_reference(local.surfaces(), scene.scan_surfaces.points, poses, true);
+  require_fast_equals_reference(local.corners(), scene.scan_corners.points, poses, false);
 }
 
 TEST_CASE("Associators with a NearestCache equal the uncached ones along Gauss-Newton poses", "[associate]") {

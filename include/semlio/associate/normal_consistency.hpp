@@ -15,12 +15,11 @@
 ///  - scan axes are computed once per frame in set_scan(), not per candidate
 ///    nor per Gauss-Newton iteration (in leaf order, each search bounded by
 ///    the previous feature's neighbours); per feature only a rotation R * n1;
-///  - the 15 candidates come from FeatureMap::nearest(): an anchor (the map
-///    point of the query's voxel by a binary search, else the 1-NN) plus the
-///    anchor's cached candidate list, exact by a triangle-inequality bound
-///    (falling back to a 15-NN k-d tree search where the bound fails), so a
-///    feature costs a lookup and at most 32 distance evaluations instead of
-///    a 15-NN query (~2x a 5-NN one);
+///  - the 15 candidates come from FeatureMap::nearest(): a k-d tree search
+///    bounded at the distance gate, so it never looks past the candidates
+///    that can matter (with LocalMapConfig::candidate_list > 0, from an
+///    anchor map point's cached list instead, exact by a triangle-inequality
+///    bound; FeatureMap's file comment says when which is faster);
 ///  - across Gauss-Newton iterations (associate() with a NearestCache) each
 ///    feature keeps its own candidate list from the previous iteration and
 ///    reuses it while a triangle-inequality bound proves it still holds the

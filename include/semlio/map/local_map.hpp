@@ -68,7 +68,7 @@ struct LocalMapConfig {
   double surface_leaf_m = 0.4;   ///< voxel leaf of the surface map (LIO-SAM mappingSurfLeafSize)
   int shape_neighbours = 10;     ///< map points per cached normal / direction fit (Algorithm 1: 10)
   bool exclude_dynamic = false;  ///< keep movable classes (is_dynamic) out of the map
-  int candidate_list = 32;       ///< cached nearest map points per point, for exact fast k-NN (0 = off; FeatureMap)
+  int candidate_list = 0;        ///< cached nearest map points per point for FeatureMap::nearest without a cache (0 = off: a k-d tree search bounded at the gate, faster since SmallKdTree3f; FeatureMap)
   std::size_t max_keyframes = 1000;  ///< keyframes stored at most (file comment: which are dropped); 0 = keep all
   /// Each voxel's point is its first point -- of the oldest active keyframe
   /// that has one there -- instead of the centroid, so map points stay put
