@@ -28,22 +28,24 @@
 /// k-d tree k-NN search bounded at the distance gate: only candidates inside
 /// the gate matter, and the bound prunes the rest. Since SmallKdTree3f that
 /// is also the fastest exact answer on sparse maps: on the 2.6 GHz EPYC VM
-/// (bench_association, four alternated rounds) a 15-NN inside 1 m took 0.88
-/// -0.91 ms for the 2 939 KITTI corners against 1.12-1.15 ms through the
-/// lists below, 0.23 against 0.32 ms for the simulated corners; on surfaces
-/// the lists were 2-7 % faster, on the synthetic street corners 30 %
-/// (0.085 against 0.123 ms, a 1 712-point map). LocalMap therefore builds
-/// without lists unless LocalMapConfig::candidate_list asks for them.
+/// (bench_association, six alternated rounds) a 15-NN inside 1 m took 0.91
+/// ms for the 2 939 KITTI corners against 1.16 ms through the lists below,
+/// 0.22 against 0.32 ms for the simulated corners; on surfaces the two were
+/// within 2 % (7 % in the tree's favour on the synthetic street), on the
+/// synthetic street corners the lists were 31 % faster (0.085 against
+/// 0.124 ms, a 1 712-point map). LocalMap therefore builds without lists
+/// (and without a voxel index, which only anchors them) unless
+/// LocalMapConfig::candidate_list asks for them.
 ///
 /// Candidate lists (optional; build()'s candidate_list > 0): per map point
 /// m, its K nearest map points (K = 32 when asked) and the distance R_m to
 /// the K-th. A query q then needs only an anchor m near q
 /// (distance a = |q - m|; any map point will do, a nearer one passes the test
 /// below more often): the point of q's voxel, found by one binary search when
-/// the map comes with a VoxelIndex (LocalMap's maps do; 81 % of surface and
-/// 29 % of corner queries on the simulated urban pair), else q's nearest by a
-/// 1-NN k-d tree search. By the triangle
-/// inequality every map point within R_m - a of q is in m's list, so when the
+/// the map comes with a VoxelIndex (LocalMap's maps do when lists are on;
+/// 81 % of surface and 29 % of corner queries on the simulated urban pair),
+/// else q's nearest inside the gate by a bounded 1-NN k-d tree search. By
+/// the triangle inequality every map point within R_m - a of q is in m's list, so when the
 /// k-th candidate found in the list (or the distance gate, if fewer lie inside
 /// it) is closer than R_m - a (minus a rounding margin), the list holds the
 /// exact answer. Otherwise nearest() falls back to a full k-NN search. Results

@@ -68,7 +68,10 @@ struct LocalMapConfig {
   double surface_leaf_m = 0.4;   ///< voxel leaf of the surface map (LIO-SAM mappingSurfLeafSize)
   int shape_neighbours = 10;     ///< map points per cached normal / direction fit (Algorithm 1: 10)
   bool exclude_dynamic = false;  ///< keep movable classes (is_dynamic) out of the map
-  int candidate_list = 0;        ///< cached nearest map points per point for FeatureMap::nearest without a cache (0 = off: a k-d tree search bounded at the gate, faster since SmallKdTree3f; FeatureMap)
+  /// Cached nearest map points per point, for FeatureMap::nearest without a
+  /// NearestCache (0 = off: a k-d tree search bounded at the gate, the faster
+  /// one on sparse maps since SmallKdTree3f; FeatureMap's file comment).
+  int candidate_list = 0;
   std::size_t max_keyframes = 1000;  ///< keyframes stored at most (file comment: which are dropped); 0 = keep all
   /// Each voxel's point is its first point -- of the oldest active keyframe
   /// that has one there -- instead of the centroid, so map points stay put
@@ -509,8 +512,12 @@ class LocalMap {
     m.ids = active_;
     m.valid = true;
     m.merged = incremental;
-    m.voxels.leaf_m = leaf_m;
-    detail::emit_voxels(m.entries, m.points, m.labels, &m.voxels.keys, config_.keep_first_point);
+    // The voxel index only anchors candidate-list queries: without lists
+    // (the default) no keys are emitted, copied or checked.
+    const bool lists = config_.candidate_list > 0;
+    m.voxels.leaf_m = lists ? leaf_m : 0.0;
+    if (!lists) m.voxels.keys.clear();
+    detail::emit_voxels(m.entries, m.points, m.labels, lists ? &m.voxels.keys : nullptr, config_.keep_first_point);
     map.build(m.points, m.labels, config_.shape_neighbours, config_.candidate_list, m.voxels);
   }
 
