@@ -4,6 +4,9 @@ include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
 install(TARGETS semlio EXPORT semlioTargets)
+if(SEMLIO_HAVE_BAGS)
+  install(TARGETS semlio_io_bags EXPORT semlioTargets)
+endif()
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/include/semlio"
         DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}")
 set(SEMLIO_CMAKE_DIR "${CMAKE_INSTALL_DATADIR}/semlio/cmake")

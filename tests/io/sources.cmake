@@ -1,0 +1,4 @@
+# Scan sources beyond the KITTI odometry layout: KITTI raw drives as
+# published and folders of PCD / PLY / .bin scans
+# (include/semlio/io/kitti_raw.hpp, scan_folder.hpp).
+set(SEMLIO_TESTS_io_sources)
