@@ -2,4 +2,5 @@
 # published and folders of PCD / PLY / .bin scans
 # (include/semlio/io/kitti_raw.hpp, scan_folder.hpp).
 set(SEMLIO_TESTS_io_sources
-  io/test_kitti_raw.cpp)
+  io/test_kitti_raw.cpp
+  io/test_scan_folder.cpp)
