@@ -1,6 +1,8 @@
 // KITTI .bin / .label / calib.txt / times.txt readers and writers.
 #include <catch2/catch.hpp>
 
+#include <sys/stat.h>
+
 #include <semlio/io/kitti.hpp>
 #include <semlio_test/data.hpp>
 #include <semlio_test/io_kitti_tmp.hpp>
@@ -299,6 +301,36 @@ TEST_CASE("times: real prefix reads, round trip, backwards and malformed lines",
   // Equal consecutive times and a leading '+' are accepted.
   semlio_test::write_text(dir.file("i.txt"), "+1.5\n1.5\n2e0\n");
   CHECK(io::read_kitti_times(dir.file("i.txt")) == std::vector<double>{1.5, 1.5, 2.0});
+}
+
+}  // namespace test_kitti
+
+namespace test_kitti {
+
+TEST_CASE("bin: a file above the 10-million-point limit or not regular is an IoError, not an abort", "[io]") {
+  // Audit issue 3: read_file grew without bound (std::bad_alloc escaped).
+  semlio_test::KittiTempDir dir("kitti_big");
+  const std::string big = dir.file("big.bin");
+  semlio_test::write_text(big, "");
+  // Sparse: one point more than the limit costs no disk and no memory.
+  std::filesystem::resize_file(big, (io::kMaxKittiBinPoints + 1) * 16);
+  const std::string msg = message_of<semlio::IoError>([&] { (void)io::read_kitti_bin(big); });
+  CHECK_THAT(msg, Catch::Contains("big.bin") && Catch::Contains("160000016 bytes") &&
+                      Catch::Contains("10000000 points"));
+  // Exactly at the limit is allowed (all points are (0,0,0) and dropped).
+  std::filesystem::resize_file(big, 1600);
+  io::ReadStats stats;
+  CHECK(io::read_kitti_bin(big, &stats).empty());
+  CHECK(stats.dropped_zero == 100);
+  // Devices, FIFOs and directories: IoError naming the path.
+  CHECK_THROWS_WITH(io::read_kitti_bin("/dev/zero"),
+                    Catch::Contains("/dev/zero") && Catch::Contains("not a regular file"));
+  CHECK_THROWS_AS(io::read_label_file("/dev/zero", 3), semlio::IoError);
+  const std::string fifo = dir.file("fifo.bin");
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  CHECK_THROWS_WITH(io::read_kitti_bin(fifo), Catch::Contains("fifo.bin") && Catch::Contains("not a regular file"));
+  CHECK_THROWS_AS(io::read_kitti_times(dir.str()), semlio::IoError);
+  CHECK_THROWS_AS(io::read_kitti_calib(fifo), semlio::IoError);
 }
 
 }  // namespace test_kitti

@@ -255,3 +255,19 @@ TEST_CASE("OXTS poses: Mercator projection, relative to the first record", "[io]
 }
 
 }  // namespace test_oxts
+
+namespace test_oxts {
+
+TEST_CASE("OXTS timestamps with 19 or more fraction digits parse without overflow", "[io]") {
+  // Audit issue 8: the fraction digits were accumulated in an int64 only to
+  // check that they are digits; 19 and more digits overflowed (UB).
+  const double nine = io::parse_oxts_timestamp("2011-09-26 13:02:25.594360375");
+  CHECK(io::parse_oxts_timestamp("2011-09-26 13:02:25.5943603750000000000") == nine);             // 19 digits
+  CHECK(io::parse_oxts_timestamp("2011-09-26 13:02:25.59436037500000000000000000000000") == nine);  // 32
+  CHECK(io::parse_oxts_timestamp("2011-09-26 13:02:25.9999999999999999999") == 1316995200.0 + 46946.0);
+  // Still rejected when a digit is not one.
+  CHECK_THROWS_AS(io::parse_oxts_timestamp("2011-09-26 13:02:25.99999999999999999999x", "ts.txt", 2),
+                  semlio::FormatError);
+}
+
+}  // namespace test_oxts

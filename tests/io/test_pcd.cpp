@@ -423,3 +423,52 @@ TEST_CASE("PCD writers round-trip a real KITTI raw scan", "[io]") {
 }
 
 }  // namespace test_pcd
+
+namespace test_pcd {
+
+TEST_CASE("PCD reader rejects a COUNT whose sums overflow, in both encodings", "[io]") {
+  // Audit issue 1: a 20-digit COUNT wrapped SIZE*COUNT and the token sum, so
+  // later fields were read from outside the record (SIGSEGV or garbage).
+  CloudTempDir dir("pcd_count");
+  const auto pcd_error = [&](const std::string& name, const std::string& bytes,
+                             const std::string& fragment) {
+    const std::string path = dir.write(name, bytes);
+    INFO(name);
+    require_error<semlio::FormatError>([&] { (void)read_pcd(path); }, path, fragment);
+  };
+  SECTION("ascii: the token sum wraps to the 2 tokens present") {
+    // 3 + (2^64 - 1) tokens wraps to 2, so "1 2" used to pass the count check
+    // and z was read from token index 2 of a 2-token line.
+    const std::string h = header("x y z pad", "4 4 4 4", "F F F F", "1 1 1 18446744073709551615", 1, "ascii");
+    pcd_error("ascii_wrap.pcd", h + "1 2\n", ":6: COUNT of field 'pad' is 18446744073709551615");
+  }
+  SECTION("binary: SIZE*COUNT wraps so x sits before the record") {
+    // 4 * (2^62 - 1) = 2^64 - 4: x's offset wrapped to -4 and the record to 8 bytes.
+    std::string b = header("pad x y z", "4 4 4 4", "U F F F", "4611686018427387903 1 1 1", 1, "binary");
+    put<float>(b, 1.0F);
+    put<float>(b, 2.0F);
+    pcd_error("binary_wrap.pcd", b, ":6: COUNT of field 'pad' is 4611686018427387903");
+  }
+  SECTION("a COUNT above the file size is refused even without a wrap") {
+    const std::string h = header("x y z pad", "4 4 4 8", "F F F F", "1 1 1 100000", 0, "binary");
+    pcd_error("big_count.pcd", h, "more values per point than the file has bytes");
+  }
+  SECTION("a large but honest COUNT of a skipped field still reads") {
+    std::string b = header("x y z pad", "4 4 4 1", "F F F U", "1 1 1 40", 1, "binary");
+    put<float>(b, 1.0F);
+    put<float>(b, 2.0F);
+    put<float>(b, 3.0F);
+    b += std::string(40, '\x7f');
+    const Scan s = read_pcd(dir.write("honest.pcd", b));
+    REQUIRE(s.size() == 1);
+    CHECK(s.points[0].z() == 3.0F);
+  }
+}
+
+TEST_CASE("PCD reader refuses non-regular files instead of reading them", "[io]") {
+  // Audit issue 3: a device or FIFO must cost an IoError, not a hang or an
+  // unbounded read.
+  require_error<semlio::IoError>([] { (void)read_pcd("/dev/zero"); }, "/dev/zero", "not a regular file");
+}
+
+}  // namespace test_pcd

@@ -381,3 +381,34 @@ TEST_CASE("PLY writer round-trips the real scan with labels", "[io]") {
 }
 
 }  // namespace test_ply
+
+namespace test_ply {
+
+TEST_CASE("PLY binary reader rejects a vertex count lower than the records present", "[io]") {
+  // Audit issue 13: the ascii reader rejected this lie; the binary one kept
+  // the first vertices and dropped the rest silently.
+  CloudTempDir dir("ply_lie");
+  const std::string xyz2 = "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n";
+  for (const std::string format : {"binary_little_endian", "binary_big_endian"}) {
+    INFO(format);
+    std::string bin = "ply\nformat " + format + " 1.0\n" + xyz2 + "end_header\n";
+    for (int k = 0; k < 9; ++k) put<float>(bin, 1.0F + static_cast<float>(k));  // 3 vertices
+    const std::string path = dir.write("lie.ply", bin);
+    require_error<semlio::FormatError>([&] { (void)read_ply(path); }, path,
+                                       ":3: header lies about its vertex count: 2 declared (12 bytes each) "
+                                       "but 12 more bytes follow");
+  }
+  // A partial extra record is the same inconsistency.
+  std::string bin = "ply\nformat binary_little_endian 1.0\n" + xyz2 + "end_header\n";
+  for (int k = 0; k < 7; ++k) put<float>(bin, 1.0F);
+  const std::string path = dir.write("partial.ply", bin);
+  require_error<semlio::FormatError>([&] { (void)read_ply(path); }, path, "but 4 more bytes follow");
+  // An element after the vertices keeps its bytes legitimately.
+  std::string with_face = "ply\nformat binary_little_endian 1.0\n" + xyz2 +
+                          "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int k = 0; k < 6; ++k) put<float>(with_face, 1.0F);
+  with_face += std::string("\x01\x00\x00\x00\x00", 5);
+  CHECK(read_ply(dir.write("face.ply", with_face)).size() == 2);
+}
+
+}  // namespace test_ply

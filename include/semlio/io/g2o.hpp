@@ -80,6 +80,7 @@ struct G2oGraph {
   std::vector<long> fixed;               ///< ids from FIX lines
   std::size_t repaired_information = 0;  ///< information matrices projected to PSD
   std::size_t skipped_lines = 0;         ///< lines with tags other than the above
+  long first_skipped_line = 0;           ///< line number of the first skipped line (0: none)
 };
 
 /// Result of a PSD check / repair.
@@ -201,21 +202,20 @@ inline std::string format_double(double v) {
 /// wrong field count, non-number, non-unit quaternion, mixed 2D/3D, duplicate
 /// vertex id, edge to an unknown vertex, bad information in strict mode).
 inline G2oGraph read_g2o(const std::string& path, const G2oReadConfig& config = {}) {
-  std::ifstream in(path);
-  if (!in) throw IoError(semlio::detail::where(path, 0, "cannot open g2o file"));
+  // Whole-file read: regular files only, bounded (a FIFO or device is an
+  // IoError instead of a hang or an unbounded read).
+  const std::string text = detail::read_file(path);
   G2oGraph g;
   std::unordered_map<long, long> first_line;     // vertex id -> line, for duplicates
   std::vector<std::pair<long, long>> edge_refs;  // (line, id) to check after reading
-  std::string line;
-  long number = 0;
   auto set_dim = [&](int d, const detail::G2oLine& l) {
     if (g.dimension != 0 && g.dimension != d) l.fail("mixes 2D and 3D elements");
     g.dimension = d;
   };
-  while (std::getline(in, line)) {
-    ++number;
-    const std::vector<std::string_view> tok = detail::split_ws(line);
-    if (tok.empty() || tok[0].front() == '#') continue;
+  std::vector<std::string_view> tok;
+  detail::for_each_line(text, [&](long number, std::string_view line) {
+    detail::split_ws(line, tok);
+    if (tok.empty() || tok[0].front() == '#') return;
     const detail::G2oLine l{path, number, tok};
     const std::string_view tag = tok[0];
     auto add_vertex = [&](long id) {
@@ -263,9 +263,10 @@ inline G2oGraph read_g2o(const std::string& path, const G2oReadConfig& config = 
         edge_refs.emplace_back(number, g.fixed.back());
       }
     } else {
+      if (g.skipped_lines == 0) g.first_skipped_line = number;
       ++g.skipped_lines;
     }
-  }
+  });
   for (const auto& [ln, id] : edge_refs) {
     if (first_line.find(id) == first_line.end())
       throw FormatError(semlio::detail::where(path, ln, "unknown vertex id " + std::to_string(id)));

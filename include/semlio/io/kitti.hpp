@@ -16,10 +16,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -35,11 +37,27 @@ namespace semlio::io {
 
 static_assert(std::endian::native == std::endian::little, "KITTI .bin/.label readers assume a little-endian host");
 
+/// Largest KITTI scan the readers accept: 10 million points (160 MB of
+/// `.bin`, 40 MB of `.label`). A real HDL-64E sweep holds ~120 000; the limit
+/// only stops a wrong path (a huge file, /dev/zero) from exhausting memory.
+inline constexpr std::size_t kMaxKittiBinPoints = 10'000'000;
+
 namespace detail {
 
-/// Reads a `.bin` file and checks its size (non-empty, multiple of 16 bytes).
+/// Reads a `.bin` file and checks its size (non-empty, multiple of 16 bytes,
+/// at most kMaxKittiBinPoints points; regular files only).
 inline std::string read_bin_bytes(const std::string& path) {
-  std::string bytes = read_file(path);
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(path, ec)) {
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && size > kMaxKittiBinPoints * 16) {
+      throw IoError(detail::where(path, 0,
+                                  "size " + std::to_string(size) + " bytes is more than " +
+                                      std::to_string(kMaxKittiBinPoints) +
+                                      " points (16 bytes each), the limit for a KITTI .bin scan"));
+    }
+  }
+  std::string bytes = read_file(path, kMaxKittiBinPoints * 16);
   if (bytes.empty()) throw FormatError(detail::where(path, 0, "empty .bin file (0 bytes)"));
   if (bytes.size() % 16 != 0) {
     throw FormatError(detail::where(path, 0,
@@ -55,7 +73,7 @@ inline std::string read_bin_bytes(const std::string& path) {
 /// FormatError (size not a multiple of 4 bytes) and ValueError when the count
 /// differs from `expected_count` (the message names both counts and the path).
 inline std::vector<std::uint32_t> read_label_file(const std::string& path, std::size_t expected_count) {
-  const std::string bytes = detail::read_file(path);
+  const std::string bytes = detail::read_file(path, kMaxKittiBinPoints * 4);
   if (bytes.size() % 4 != 0) {
     throw FormatError(detail::where(
         path, 0, "size " + std::to_string(bytes.size()) + " bytes is not a multiple of 4 (uint32 per point)"));

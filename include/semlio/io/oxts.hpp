@@ -94,7 +94,7 @@ inline double parse_oxts_timestamp(std::string_view text, const std::string& pat
   const std::int64_t mi = detail::digits_value(time.substr(3, 2));
   const std::string_view sec_text = time.substr(6);
   if (detail::digits_value(sec_text.substr(0, 2)) < 0 || (sec_text.size() > 2 && sec_text[2] != '.') ||
-      (sec_text.size() > 3 && detail::digits_value(sec_text.substr(3)) < 0) || sec_text.size() == 3) {
+      (sec_text.size() > 3 && !detail::all_digits(sec_text.substr(3))) || sec_text.size() == 3) {
     return fail("has malformed seconds");
   }
   const auto sec = detail::to_double(sec_text);

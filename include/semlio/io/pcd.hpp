@@ -21,6 +21,7 @@
 #include <bit>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -62,6 +63,9 @@ struct Header {
   long data_line = 0;           ///< line number of the DATA line
   cloud::Columns columns;       ///< indices into `fields` of the used columns
 };
+
+using semlio::io::detail::checked_add;
+using semlio::io::detail::checked_mul;
 
 /// Throws FormatError("path:line: what").
 [[noreturn]] inline void fail(const std::string& path, long line, const std::string& what) {
@@ -205,11 +209,29 @@ inline Header parse_header(const std::string& path, std::string_view bytes) {
     if (!counts.empty()) {
       f.count = parse_count(path, count_line, "COUNT", counts[i]);
       if (f.count == 0) fail(path, count_line, "COUNT of field '" + f.name + "' is 0");
+      // Every value takes at least one byte in either encoding, so a COUNT
+      // above the file size is a lie; it also keeps the sums below small.
+      if (f.count > bytes.size()) {
+        fail(path, count_line,
+             "COUNT of field '" + f.name + "' is " + std::to_string(f.count) +
+                 ", more values per point than the file has bytes (" + std::to_string(bytes.size()) +
+                 ")");
+      }
     }
     f.offset = h.record_bytes;
     f.token = h.tokens;
-    h.record_bytes += f.type.bytes * f.count;
-    h.tokens += f.count;
+    // Checked sums: offsets and token indices index into the payload, so a
+    // wrapped sum would read outside it.
+    const auto field_bytes = checked_mul(f.type.bytes, f.count);
+    const auto record = field_bytes ? checked_add(h.record_bytes, *field_bytes) : std::nullopt;
+    const auto tokens = checked_add(h.tokens, f.count);
+    if (!record || !tokens) {
+      fail(path, count_line,
+           "SIZE * COUNT summed over the fields overflows at field '" + f.name + "' (COUNT " +
+               std::to_string(f.count) + ")");
+    }
+    h.record_bytes = *record;
+    h.tokens = *tokens;
     const auto index = static_cast<int>(i);
     int* slot = h.columns.slot(f.name);
     if (slot != nullptr) {

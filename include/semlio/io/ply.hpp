@@ -282,6 +282,16 @@ inline void read_binary(const std::string& path, const Header& h, const VertexLa
         [&](int col) { return cloud::load_as_u32(rec + prop(col).offset, prop(col).type, swap); });
     if (cloud::keep_point(r, stats)) cloud::push_point(scan, v.columns, r);
   }
+  // The same lie the ascii reader rejects: when vertex is the last element,
+  // bytes after its records mean the header declares fewer vertices than the
+  // file holds (or the file is not what the header says).
+  const std::size_t rest = available - ve.count * v.record_bytes;
+  if (v.element + 1 == h.elements.size() && rest != 0) {
+    fail(path, ve.line,
+         "header lies about its vertex count: " + std::to_string(ve.count) + " declared (" +
+             std::to_string(v.record_bytes) + " bytes each) but " + std::to_string(rest) +
+             " more bytes follow the last vertex");
+  }
 }
 
 /// Decodes an ascii payload: one line per element instance.

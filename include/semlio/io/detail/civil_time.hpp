@@ -47,14 +47,22 @@ inline int days_in_month(std::int64_t y, int m) noexcept {
   return (m == 2 && is_leap_year(y)) ? 29 : kDays[m - 1];
 }
 
-/// Parses a fixed-width unsigned decimal field; -1 when not all digits.
-inline std::int64_t digits_value(std::string_view s) noexcept {
-  if (s.empty()) return -1;
-  std::int64_t v = 0;
+/// True when `s` is non-empty and holds only the digits 0-9 (any length).
+inline bool all_digits(std::string_view s) noexcept {
+  if (s.empty()) return false;
   for (const char c : s) {
-    if (c < '0' || c > '9') return -1;
-    v = v * 10 + (c - '0');
+    if (c < '0' || c > '9') return false;
   }
+  return true;
+}
+
+/// Parses a fixed-width unsigned decimal field; -1 when not all digits or
+/// longer than 18 digits (the most an int64 holds without overflow, so no
+/// input can make the accumulation undefined behaviour).
+inline std::int64_t digits_value(std::string_view s) noexcept {
+  if (!all_digits(s) || s.size() > 18) return -1;
+  std::int64_t v = 0;
+  for (const char c : s) v = v * 10 + (c - '0');
   return v;
 }
 

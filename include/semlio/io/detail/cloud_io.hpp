@@ -22,6 +22,7 @@
 
 #include <semlio/core/error.hpp>
 #include <semlio/core/scan.hpp>
+#include <semlio/io/detail/text.hpp>
 #include <semlio/io/read_stats.hpp>
 
 namespace semlio::io::detail::cloud {
@@ -47,8 +48,14 @@ inline bool is_valid(ScalarType t) noexcept {
   return t.bytes == 1 || t.bytes == 2 || t.bytes == 4 || t.bytes == 8;
 }
 
-/// Whole file as bytes; IoError when it is missing, a directory or unreadable.
-inline std::string read_file_bytes(const std::string& path) {
+/// Largest PCD/PLY file the readers accept: 10 million points (the KITTI
+/// .bin limit) at up to ~100 bytes per point (an ascii line with ring, label
+/// and time), i.e. 1 GiB. Larger files are refused before any allocation.
+inline constexpr std::uint64_t kMaxCloudFileBytes = std::uint64_t{1} << 30;
+
+/// Whole file as bytes; IoError when it is missing, not a regular file (a
+/// directory, FIFO or device), larger than `max_bytes` or unreadable.
+inline std::string read_file_bytes(const std::string& path, std::uint64_t max_bytes = kMaxCloudFileBytes) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) {
     throw IoError(located(path, 0, "file does not exist"));
@@ -56,18 +63,7 @@ inline std::string read_file_bytes(const std::string& path) {
   if (std::filesystem::is_directory(path, ec)) {
     throw IoError(located(path, 0, "is a directory, expected a file"));
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError(located(path, 0, "cannot open file for reading"));
-  std::string bytes;
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw IoError(located(path, 0, "cannot determine file size"));
-  in.seekg(0, std::ios::beg);
-  bytes.resize(static_cast<std::size_t>(size));
-  if (size > 0 && !in.read(bytes.data(), static_cast<std::streamsize>(size))) {
-    throw IoError(located(path, 0, "read failed"));
-  }
-  return bytes;
+  return semlio::io::detail::read_file(path, max_bytes);
 }
 
 /// Writes bytes to a file, replacing it; IoError when it cannot be written.
