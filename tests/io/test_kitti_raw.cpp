@@ -8,7 +8,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -68,6 +70,31 @@ std::string make_drive(const semlio_test::KittiTempDir& dir, const std::vector<i
     }
   }
   return dir.file(drive);
+}
+
+// Mutates `text` once: a byte replaced by one that matters to the parsers, a
+// cut, an inserted or a repeated line.
+std::string mutate(std::string text, std::mt19937& rng) {
+  static const std::string kBytes = "0123456789-:. \n\r\tenx+\0";
+  const auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  if (text.empty()) return std::string(1, kBytes[pick(kBytes.size())]);
+  const std::size_t at = pick(text.size());
+  switch (pick(4)) {
+    case 0:
+      text[at] = kBytes[pick(kBytes.size())];
+      break;
+    case 1:
+      text.resize(at);
+      break;
+    case 2:
+      text.insert(at, std::string(1 + pick(3), kBytes[pick(kBytes.size())]));
+      break;
+    default: {
+      const std::size_t end = text.find('\n', at);
+      text.insert(at, text.substr(at, end == std::string::npos ? std::string::npos : end - at + 1));
+    }
+  }
+  return text;
 }
 
 io::KittiRawDriveConfig calib_from(const std::string& path) {
@@ -383,6 +410,50 @@ TEST_CASE("KITTI raw calibration files: R and T, other keys ignored, typed error
   write("R 1 0 0 0 1 0 0 0 1\n");
   CHECK_THROWS_AS(io::read_kitti_raw_calib(f), semlio::FormatError);
   CHECK_THROWS_AS(io::read_kitti_raw_calib(dir.file("none.txt")), semlio::IoError);
+}
+
+TEST_CASE("KITTI raw: mutated files give typed errors or data, never anything else", "[io]") {
+  semlio_test::KittiTempDir dir("raw");
+  const std::string path = make_drive(dir, {0, 1, 2});
+  const std::vector<std::string> targets = {
+      path + "/velodyne_points/timestamps.txt", path + "/velodyne_points/timestamps_start.txt",
+      path + "/oxts/timestamps.txt",            path + "/oxts/data/0000000001.txt",
+      path + "/velodyne_points/data/0000000002.bin", dir.file("2011_09_26/calib_imu_to_velo.txt"),
+      dir.file("2011_09_26/calib_velo_to_cam.txt")};
+  std::mt19937 rng(20260412);
+  int opened = 0;
+  int typed_errors = 0;
+  for (int round = 0; round < 400; ++round) {
+    const std::string& target = targets[static_cast<std::size_t>(round) % targets.size()];
+    const std::string original = io::detail::read_file(target);
+    semlio_test::write_text(target, mutate(original, rng));
+    std::string other;
+    try {
+      const io::KittiRawDrive drive(path);
+      ++opened;
+      std::string error;
+      for (std::size_t i = 0; i < drive.size(); ++i) {
+        (void)drive.read_or_empty(i, error);
+        (void)drive.oxts_minus_scan_stamp_s(i);
+        CHECK(std::isfinite(drive.stamp(i)));
+      }
+      try {
+        (void)drive.imu_samples();
+        (void)drive.reference_poses_lidar();
+      } catch (const semlio::Error&) {
+        ++typed_errors;
+      }
+    } catch (const semlio::Error&) {
+      ++typed_errors;
+    } catch (const std::exception& e) {
+      other = e.what();
+    }
+    CHECK(other.empty());  // only semlio::Error may escape
+    semlio_test::write_text(target, original);
+  }
+  // Both outcomes occur: the mutations are neither all harmless nor all fatal.
+  CHECK(opened > 50);
+  CHECK(typed_errors > 50);
 }
 
 }  // namespace test_kitti_raw

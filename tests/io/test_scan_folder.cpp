@@ -6,7 +6,10 @@
 #include <semlio_test/data.hpp>
 #include <semlio_test/io_kitti_tmp.hpp>
 
+#include <cmath>
+#include <exception>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -252,6 +255,79 @@ TEST_CASE("scan folder: the number in a name, compared exactly", "[io]") {
   CHECK(d::time_unit_digits(num("100000000")) == 0);   // 9 digits: seconds (1973)
   CHECK(d::time_unit_digits(num("1599131415123.5")) == -1);  // ms with a fraction: not a time
   CHECK(d::time_unit_digits(num("scan_1599131415")) == -1);  // only whole names are times
+}
+
+TEST_CASE("scan folder: mutated files and random names give typed errors or data, never anything else", "[io]") {
+  semlio_test::KittiTempDir dir("folder");
+  std::mt19937 rng(20260413);
+  static const std::string kBytes = "0123456789-:. \n\r\tenx+_#\0";
+  const auto pick = [&](std::size_t n) { return std::uniform_int_distribution<std::size_t>(0, n - 1)(rng); };
+  const auto mutate = [&](std::string text) {
+    if (text.empty()) return std::string(1, kBytes[pick(kBytes.size())]);
+    const std::size_t at = pick(text.size());
+    switch (pick(3)) {
+      case 0:
+        text[at] = kBytes[pick(kBytes.size())];
+        break;
+      case 1:
+        text.resize(at);
+        break;
+      default:
+        text.insert(at, std::string(1 + pick(3), kBytes[pick(kBytes.size())]));
+    }
+    return text;
+  };
+  write_scans(dir, "p", {"000000.pcd", "000001.pcd"});
+  io::write_pcd(dir.file("p/000000.pcd"), scan_of(4), io::PcdEncoding::kAscii);
+  semlio_test::write_text(dir.file("p/times.txt"), "0.0\n0.1\n");
+  semlio_test::write_text(dir.file("p/poses.txt"), "0 0 0 0 0 0 0 1\n0.1 1 0 0 0 0 0 1\n");
+  write_scans(dir, "y", {"1317357625.1.ply", "1317357625.2.ply"});
+  semlio_test::write_text(dir.file("y/poses.txt"), "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n");
+  const std::vector<std::string> targets = {dir.file("p/000000.pcd"), dir.file("p/000001.pcd"),
+                                            dir.file("p/times.txt"),  dir.file("p/poses.txt"),
+                                            dir.file("y/1317357625.1.ply"), dir.file("y/poses.txt")};
+  int opened = 0;
+  int typed_errors = 0;
+  for (int round = 0; round < 300; ++round) {
+    const std::string& target = targets[static_cast<std::size_t>(round) % targets.size()];
+    const std::string original = io::detail::read_file(target);
+    semlio_test::write_text(target, mutate(original));
+    // A random extra scan name in the folder too, every third round.
+    std::string extra;
+    if (round % 3 == 0) {
+      for (std::size_t k = 1 + pick(24); k > 0; --k) extra.push_back("0123456789._-ab"[pick(15)]);
+      extra = fs::path(target).parent_path().string() + "/" + extra + fs::path(target).extension().string();
+      if (fs::exists(extra)) {
+        extra.clear();  // never overwrite (or later remove) a file of the folder
+      } else {
+        fs::copy_file(target, extra);
+      }
+    }
+    std::string other;
+    try {
+      const io::ScanFolder folder(fs::path(target).parent_path().string());
+      ++opened;
+      std::string error;
+      for (std::size_t i = 0; i < folder.size(); ++i) {
+        (void)folder.read_or_empty(i, error);
+        CHECK(std::isfinite(folder.stamp(i)));
+      }
+      try {
+        if (folder.has_ground_truth()) (void)folder.ground_truth_lidar();
+      } catch (const semlio::Error&) {
+        ++typed_errors;
+      }
+    } catch (const semlio::Error&) {
+      ++typed_errors;
+    } catch (const std::exception& e) {
+      other = e.what();
+    }
+    CHECK(other.empty());  // only semlio::Error may escape
+    semlio_test::write_text(target, original);
+    if (!extra.empty()) fs::remove(extra);
+  }
+  CHECK(opened > 50);
+  CHECK(typed_errors > 50);
 }
 
 }  // namespace test_scan_folder
