@@ -60,13 +60,14 @@ std::string make_drive(const semlio_test::KittiTempDir& dir, const std::vector<i
     fs::copy_file(real(f), dir.file(drive + f));
   }
   for (const int f : frames) {
-    write_bin(dir.file(drive + "velodyne_points/data/" + io::detail::frame_stem(static_cast<std::size_t>(f), 10) +
-                       ".bin"),
-              f + 1);
+    write_bin(
+        dir.file(drive + "velodyne_points/data/" + io::detail::frame_stem(static_cast<std::size_t>(f), 10) + ".bin"),
+        f + 1);
   }
   if (with_calib) {
     for (const char* f : {"calib_imu_to_velo.txt", "calib_velo_to_cam.txt"}) {
-      fs::copy_file(semlio_test::data_path(std::string("kitti_raw/2011_09_26/") + f), dir.file(std::string("2011_09_26/") + f));
+      fs::copy_file(semlio_test::data_path(std::string("kitti_raw/2011_09_26/") + f),
+                    dir.file(std::string("2011_09_26/") + f));
     }
   }
   return dir.file(drive);
@@ -415,11 +416,13 @@ TEST_CASE("KITTI raw calibration files: R and T, other keys ignored, typed error
 TEST_CASE("KITTI raw: mutated files give typed errors or data, never anything else", "[io]") {
   semlio_test::KittiTempDir dir("raw");
   const std::string path = make_drive(dir, {0, 1, 2});
-  const std::vector<std::string> targets = {
-      path + "/velodyne_points/timestamps.txt", path + "/velodyne_points/timestamps_start.txt",
-      path + "/oxts/timestamps.txt",            path + "/oxts/data/0000000001.txt",
-      path + "/velodyne_points/data/0000000002.bin", dir.file("2011_09_26/calib_imu_to_velo.txt"),
-      dir.file("2011_09_26/calib_velo_to_cam.txt")};
+  const std::vector<std::string> targets = {path + "/velodyne_points/timestamps.txt",
+                                            path + "/velodyne_points/timestamps_start.txt",
+                                            path + "/oxts/timestamps.txt",
+                                            path + "/oxts/data/0000000001.txt",
+                                            path + "/velodyne_points/data/0000000002.bin",
+                                            dir.file("2011_09_26/calib_imu_to_velo.txt"),
+                                            dir.file("2011_09_26/calib_velo_to_cam.txt")};
   std::mt19937 rng(20260412);
   int opened = 0;
   int typed_errors = 0;

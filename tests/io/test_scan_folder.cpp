@@ -251,8 +251,8 @@ TEST_CASE("scan folder: the number in a name, compared exactly", "[io]") {
   CHECK(d::compare_numbers(num("1000000000000000000000000000000000000001"),
                            num("1000000000000000000000000000000000000000")) > 0);
   CHECK(d::time_unit_digits(num("1000000000000000000000000000000000000001")) == -1);
-  CHECK(d::time_unit_digits(num("99999999")) == -1);   // 8 digits: a frame number
-  CHECK(d::time_unit_digits(num("100000000")) == 0);   // 9 digits: seconds (1973)
+  CHECK(d::time_unit_digits(num("99999999")) == -1);         // 8 digits: a frame number
+  CHECK(d::time_unit_digits(num("100000000")) == 0);         // 9 digits: seconds (1973)
   CHECK(d::time_unit_digits(num("1599131415123.5")) == -1);  // ms with a fraction: not a time
   CHECK(d::time_unit_digits(num("scan_1599131415")) == -1);  // only whole names are times
 }
@@ -283,8 +283,8 @@ TEST_CASE("scan folder: mutated files and random names give typed errors or data
   semlio_test::write_text(dir.file("p/poses.txt"), "0 0 0 0 0 0 0 1\n0.1 1 0 0 0 0 0 1\n");
   write_scans(dir, "y", {"1317357625.1.ply", "1317357625.2.ply"});
   semlio_test::write_text(dir.file("y/poses.txt"), "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n");
-  const std::vector<std::string> targets = {dir.file("p/000000.pcd"), dir.file("p/000001.pcd"),
-                                            dir.file("p/times.txt"),  dir.file("p/poses.txt"),
+  const std::vector<std::string> targets = {dir.file("p/000000.pcd"),       dir.file("p/000001.pcd"),
+                                            dir.file("p/times.txt"),        dir.file("p/poses.txt"),
                                             dir.file("y/1317357625.1.ply"), dir.file("y/poses.txt")};
   int opened = 0;
   int typed_errors = 0;

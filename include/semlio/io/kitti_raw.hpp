@@ -84,9 +84,9 @@ inline SE3d read_kitti_raw_calib(const std::string& path) {
     if (key != "R" && key != "T") return;
     long& seen = key == "R" ? r_line : t_line;
     if (seen != 0) {
-      throw FormatError(detail::where(path, line,
-                                      "calibration key '" + std::string(key) + "' appears twice (first on line " +
-                                          std::to_string(seen) + ")"));
+      throw FormatError(detail::where(
+          path, line,
+          "calibration key '" + std::string(key) + "' appears twice (first on line " + std::to_string(seen) + ")"));
     }
     seen = line;
     detail::split_ws(s.substr(colon + 1), tok);
@@ -107,7 +107,8 @@ inline SE3d read_kitti_raw_calib(const std::string& path) {
     }
   });
   if (r_line == 0 || t_line == 0) {
-    throw FormatError(detail::where(path, 0, std::string("calibration has no '") + (r_line == 0 ? "R" : "T") + ":' line"));
+    throw FormatError(
+        detail::where(path, 0, std::string("calibration has no '") + (r_line == 0 ? "R" : "T") + ":' line"));
   }
   return detail::pose_from_3x4(v, path, r_line, "calibration [R|T]");
 }
@@ -130,9 +131,9 @@ inline std::vector<std::optional<double>> read_raw_stamp_lines(const std::string
     }
     const double t = parse_oxts_timestamp(s, path, line);
     if (last && t < *last) {
-      throw ValueError(where(path, line,
-                             "timestamp '" + std::string(trim(s)) + "' is earlier than line " +
-                                 std::to_string(last_line) + "'s"));
+      throw ValueError(
+          where(path, line,
+                "timestamp '" + std::string(trim(s)) + "' is earlier than line " + std::to_string(last_line) + "'s"));
     }
     last = t;
     last_line = line;
@@ -159,9 +160,9 @@ inline std::map<std::uint64_t, std::string> numbered_files(const std::filesystem
     const auto key = static_cast<std::uint64_t>(*number);
     const auto [it, fresh] = out.emplace(key, stem);
     if (!fresh) {
-      throw FormatError(where(entry.path().string(), 0,
-                              "frame " + std::to_string(key) + " appears twice (also " + it->second +
-                                  std::string(ext) + ")"));
+      throw FormatError(
+          where(entry.path().string(), 0,
+                "frame " + std::to_string(key) + " appears twice (also " + it->second + std::string(ext) + ")"));
     }
   }
   if (ec) throw IoError(where(dir.string(), 0, "cannot list directory: " + ec.message()));
@@ -409,7 +410,8 @@ class KittiRawDrive {
   // One OXTS data file: exactly one non-blank line of 30 fields (stamp unset).
   [[nodiscard]] OxtsRecord read_packet(std::size_t k) const {
     const std::string path = packet_path(k);
-    if (oxts_stems_.count(k) == 0) throw IoError(detail::where(path, 0, "OXTS packet " + std::to_string(k) + " is missing"));
+    if (oxts_stems_.count(k) == 0)
+      throw IoError(detail::where(path, 0, "OXTS packet " + std::to_string(k) + " is missing"));
     const std::string body = detail::read_file(path);
     OxtsRecord rec;
     long data_line = 0;
@@ -552,7 +554,7 @@ class KittiRawDrive {
   std::vector<double> stamps_;                       // sweep start per frame
   std::vector<bool> interpolated_;
   double period_s_ = 0.1;
-  std::vector<std::optional<double>> oxts_lines_;       // oxts/timestamps.txt, every line
+  std::vector<std::optional<double>> oxts_lines_;    // oxts/timestamps.txt, every line
   std::map<std::uint64_t, std::string> oxts_stems_;  // packet number -> file stem
   std::string calib_dir_;
   std::optional<SE3d> T_velo_imu_;

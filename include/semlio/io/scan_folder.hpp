@@ -80,8 +80,8 @@ namespace detail {
 
 /// The number in a scan file's name, normalised for exact comparison.
 struct ScanNameNumber {
-  std::string integer;   ///< integer digits without leading zeros ("0" for zero)
-  std::string fraction;  ///< fraction digits without trailing zeros (may be empty)
+  std::string integer;      ///< integer digits without leading zeros ("0" for zero)
+  std::string fraction;     ///< fraction digits without trailing zeros (may be empty)
   bool whole_name = false;  ///< the whole stem is the number (it may be a time)
 };
 
@@ -317,17 +317,19 @@ class ScanFolder {
         if (f.empty()) continue;
         names += (names.empty() ? "" : ", ") + f;
       }
-      throw FormatError(detail::where(dir.string(), 0, "mixes scan formats (" + names + "): keep one format per folder"));
+      throw FormatError(
+          detail::where(dir.string(), 0, "mixes scan formats (" + names + "): keep one format per folder"));
     }
-    format_ = !first_of[0].empty() ? ScanFileFormat::pcd
+    format_ = !first_of[0].empty()   ? ScanFileFormat::pcd
               : !first_of[1].empty() ? ScanFileFormat::ply
                                      : ScanFileFormat::kitti_bin;
     std::sort(entries.begin(), entries.end(),
               [](const Entry& a, const Entry& b) { return detail::compare_numbers(a.number, b.number) < 0; });
     for (std::size_t i = 1; i < entries.size(); ++i) {
       if (detail::compare_numbers(entries[i - 1].number, entries[i].number) == 0) {
-        throw FormatError(detail::where((dir / entries[i].name).string(), 0,
-                                        "has the same number as " + entries[i - 1].name + " (frame order is ambiguous)"));
+        throw FormatError(
+            detail::where((dir / entries[i].name).string(), 0,
+                          "has the same number as " + entries[i - 1].name + " (frame order is ambiguous)"));
       }
     }
     for (Entry& e : entries) {
@@ -361,11 +363,11 @@ class ScanFolder {
       return;
     }
     // Integer frame numbers below 1e9 (at most 8 digits here, 9 being a time).
-    const bool frame_numbers = std::all_of(numbers_.begin(), numbers_.end(), [](const auto& n) {
-      return n.fraction.empty() && n.integer.size() <= 8;
-    });
+    const bool frame_numbers = std::all_of(numbers_.begin(), numbers_.end(),
+                                           [](const auto& n) { return n.fraction.empty() && n.integer.size() <= 8; });
     for (std::size_t i = 0; i < numbers_.size(); ++i) {
-      const double k = frame_numbers ? static_cast<double>(detail::to_int(numbers_[i].integer).value_or(0)) : static_cast<double>(i);
+      const double k =
+          frame_numbers ? static_cast<double>(detail::to_int(numbers_[i].integer).value_or(0)) : static_cast<double>(i);
       stamps_.push_back(k * config_.nominal_period_s);
     }
     source_ = ScanStampSource::nominal_period;
