@@ -1,0 +1,211 @@
+#!/usr/bin/env bash
+# Regenerates docs/results.md and docs/figures/*.png from scratch: the paper's
+# evaluation (section 4) applied to every dataset the project can run.
+#
+#   scripts/reproduce.sh [--quick] [--check]
+#
+#   (no option) full run (<= 60 min on a 2-core machine): simulated drives of
+#               300-1000 frames, the real KITTI data of tests/data and the real
+#               data given below; writes docs/results.md, docs/figures/*.png
+#               and the results block of README.md.
+#   --quick     small drives (< 3 min); writes docs/results_quick.md, the part
+#               of the results that does not depend on the machine (no frame
+#               times), and its figures under $OUT/figures only.
+#   --check     with --quick: write nothing under docs/, compare the fresh
+#               table with docs/results_quick.md and exit 1 when they differ
+#               (the CTest entry script_reproduce_quick).
+#
+# Real data beyond tests/data, each optional (full run only):
+#   KITTI_RAW=DIR        a folder of KITTI raw scans as PCD, e.g. the 22-frame
+#                        snippet /work/shared/data/kitti_raw/snippet_22 (no
+#                        ground truth: path length and frame time only)
+#   KITTI_RAW_DRIVE=DIR  a KITTI raw drive as published (..._drive_NNNN_sync,
+#                        with velodyne_points/ and oxts/); KITTI_RAW_CALIB=DIR
+#                        its day's calib folder (default: DIR/../calib_<date>).
+#                        The OXTS trajectory is the reference
+#                        (scripts/kitti_raw_drive.py); runs deskew the sweeps.
+#   KITTI_ROOT=DIR       a KITTI odometry sequence dataset/sequences/NN
+#                        (velodyne/, calib.txt, times.txt; ground truth as
+#                        semlio_kitti finds it); KITTI_FRAMES=N caps its length.
+# Environment: BUILD_DIR (build), OUT (results/reproduce[_quick]), SKIP_BUILD=1
+# (use BUILD_DIR as built, install nothing), SEED (1), LONG_FRAMES (1000: the
+# long simulated drive of the full run).
+#
+# Each dataset runs semlio_kitti six times (configurations below, all with
+# the same settings otherwise) one after the other; accuracy is
+# deterministic (same binary, same numbers), frame times are not.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+QUICK=0
+CHECK=0
+for arg in "$@"; do
+  case "$arg" in
+    --quick) QUICK=1 ;;
+    --check) CHECK=1 ;;
+    -h|--help) sed -n '2,36p' "$0"; exit 0 ;;
+    *) echo "reproduce.sh: unknown option '$arg' (see --help)" >&2; exit 2 ;;
+  esac
+done
+if [[ $CHECK == 1 && $QUICK == 0 ]]; then
+  echo "reproduce.sh: --check compares the --quick table; use --quick --check" >&2
+  exit 2
+fi
+
+BUILD_DIR=${BUILD_DIR:-build}
+SEED=${SEED:-1}
+if [[ $QUICK == 1 ]]; then OUT=${OUT:-results/reproduce_quick}; else OUT=${OUT:-results/reproduce}; fi
+if [[ -z "${SKIP_BUILD:-}" ]]; then
+  scripts/install_deps.sh python3-matplotlib
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
+  cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_simulate semlio_kitti semlio_convert semlio_segment_eval
+fi
+BIN="$BUILD_DIR/examples"
+for tool in semlio_simulate semlio_kitti semlio_convert semlio_segment_eval; do
+  [[ -x "$BIN/$tool" ]] || { echo "reproduce.sh: $BIN/$tool not built" >&2; exit 1; }
+done
+PLOTS=1
+/usr/bin/python3 -c "import matplotlib" 2> /dev/null || PLOTS=0
+if [[ $PLOTS == 0 && $QUICK == 0 ]]; then
+  echo "reproduce.sh: python3-matplotlib is missing (the full run draws the figures)" >&2
+  exit 1
+fi
+
+rm -rf "$OUT"
+mkdir -p "$OUT/data" "$OUT/runs" "$OUT/configs"
+start=$(date +%s)
+
+# --- the six configurations of Table 3 --------------------------------------
+# semlio_kitti has two presets; the parts of `full` are switched off through
+# its --config YAML (examples/kitti/settings_yaml.hpp):
+# - semantic keyframes off: semantic_keyframes.weight_min = 1 clamps W_se to
+#   1 (eq. 20), so tau' = tau (eq. 21-22): the pose-threshold rule with the
+#   baseline's thresholds (both 1.0 m / 0.2 rad);
+# - semantic weights off: --labels none gives every point the same label, so
+#   every weight of eq. 10-12 is 1 (and the keyframe histograms carry nothing);
+# - normal-consistency association off: normal.candidates = keep = 5 and
+#   max_angle_rad = 1.57 (the largest the validator allows is pi/2) keep the 5
+#   nearest map points within 1 m, as NearestK does (nearly: a candidate
+#   whose axis is exactly perpendicular to the scan's would still be dropped).
+# "Semantic keyframes alone" needs the weights off with the labels on, which no
+# YAML key does: that row is semantic keyframes + semantic weights (no Algorithm 1).
+cat > "$OUT/configs/full.yaml" <<< "{}"
+cat > "$OUT/configs/baseline.yaml" <<< "{}"
+cat > "$OUT/configs/full_pose_kf.yaml" <<< "semantic_keyframes: {weight_min: 1.0}"
+cat > "$OUT/configs/nc_only.yaml" <<< "semantic_keyframes: {weight_min: 1.0}"
+printf 'normal: {candidates: 5, keep: 5, max_angle_rad: 1.57}\nsemantic_keyframes: {weight_min: 1.0}\n' \
+  > "$OUT/configs/weights_only.yaml"
+printf 'normal: {candidates: 5, keep: 5, max_angle_rad: 1.57}\n' > "$OUT/configs/weights_kf.yaml"
+# name preset labels(semantic|none)
+CONFIGS=("baseline baseline semantic" "full full semantic" "nc_only full none"
+         "weights_only full semantic" "weights_kf full semantic" "full_pose_kf full semantic")
+
+# --- datasets ----------------------------------------------------------------
+# datasets.tsv: name, dir, kind (simulated|real), scene, label source, extra
+# YAML (deskew for raw sweeps; "-" none), reference
+DS="$OUT/datasets.tsv"
+: > "$DS"
+simulate() {  # name world traffic frames
+  echo "== simulating $1: $2, $3 traffic, $4 frames, seed $SEED"
+  "$BIN/semlio_simulate" --world "$2" --traffic "$3" --frames "$4" --seed "$SEED" --threads 2 \
+    --out "$OUT/data/$1" > /dev/null
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$OUT/data/$1" simulated "$2, $3 traffic" predictions - \
+    "simulator (exact)" >> "$DS"
+}
+pcd_folder() {  # name dir: a folder of PCD scans -> a KITTI layout (no ground truth)
+  mkdir -p "$OUT/data/$1/velodyne"
+  local i=0 f
+  for f in "$2"/*.pcd; do
+    "$BIN/semlio_convert" "$f" "$(printf '%s/data/%s/velodyne/%06d.bin' "$OUT" "$1" "$i")" > /dev/null
+    i=$((i + 1))
+  done
+  printf 'deskew: {mode: constant_velocity, point_times: azimuth}\n' > "$OUT/configs/$1.extra.yaml"
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$OUT/data/$1" real "KITTI raw HDL-64E, urban road" geometric \
+    "$OUT/configs/$1.extra.yaml" "none" >> "$DS"
+}
+if [[ $QUICK == 1 ]]; then
+  simulate sim_urban_heavy urban heavy 30
+  simulate sim_rural rural light 20
+else
+  # sim_urban_heavy is scripts/demo.sh's drive (same world, traffic, length,
+  # seed and labels), so its row is what the demo prints.
+  simulate sim_urban_heavy urban heavy 300
+  simulate sim_urban_long urban heavy "${LONG_FRAMES:-1000}"
+  simulate sim_rural rural light 300
+  simulate sim_highway highway light 300
+fi
+printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' kitti00_2 tests/data/kitti/sequences/00 real "KITTI 00 (first 2 scans), urban" \
+  geometric - "KITTI ground truth" >> "$DS"
+pcd_folder kitti_raw_3 tests/data/kitti_raw/snippet_22
+if [[ $QUICK == 0 ]]; then
+  if [[ -n "${KITTI_RAW:-}" ]]; then pcd_folder kitti_raw_snippet "$KITTI_RAW"; fi
+  if [[ -n "${KITTI_RAW_DRIVE:-}" ]]; then
+    drive=${KITTI_RAW_DRIVE%/}
+    date_part=$(basename "$drive" | cut -c1-10)
+    calib=${KITTI_RAW_CALIB:-$(dirname "$drive")/calib_$date_part}
+    name=kitti_raw_$(basename "$drive" | sed -n 's/.*drive_\([0-9]*\).*/\1/p')
+    /usr/bin/python3 scripts/kitti_raw_drive.py "$drive" "$calib" "$OUT/data/$name"
+    printf 'deskew: {mode: constant_velocity, point_times: azimuth}\n' > "$OUT/configs/$name.extra.yaml"
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$OUT/data/$name" real "KITTI raw $(basename "$drive"), residential" \
+      geometric "$OUT/configs/$name.extra.yaml" "OXTS GNSS/INS (~0.5 m)" >> "$DS"
+  fi
+  if [[ -n "${KITTI_ROOT:-}" ]]; then
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "kitti_$(basename "${KITTI_ROOT%/}")" "${KITTI_ROOT%/}" real \
+      "KITTI odometry $(basename "${KITTI_ROOT%/}")" geometric - "KITTI ground truth" >> "$DS"
+  fi
+fi
+
+# --- runs --------------------------------------------------------------------
+while IFS=$'\t' read -r name dir kind scene labels extra ref; do
+  last=()
+  if [[ "$name" == kitti_[0-9]* && -n "${KITTI_FRAMES:-}" ]]; then last=(--last $((KITTI_FRAMES - 1))); fi
+  for c in "${CONFIGS[@]}"; do
+    read -r cname preset lab <<< "$c"
+    [[ "$lab" == none ]] && lab=none || lab=$labels
+    cfg="$OUT/configs/$name.$cname.yaml"
+    cat "$OUT/configs/$cname.yaml" > "$cfg"
+    if [[ "$extra" != - ]]; then cat "$extra" >> "$cfg"; fi
+    # Both files are YAML maps; "{}" plus a second map is not one: drop it.
+    sed -i '/^{}$/d' "$cfg"
+    [[ -s "$cfg" ]] || echo "{}" > "$cfg"
+    echo "== $name: $cname (semlio_kitti --preset $preset --labels $lab)"
+    "$BIN/semlio_kitti" --sequence "$dir" --preset "$preset" --labels "$lab" --config "$cfg" --map off \
+      "${last[@]}" --out "$OUT/runs/$name/$cname" --quiet > "$OUT/runs/$name.$cname.log" 2>&1 ||
+      { cat "$OUT/runs/$name.$cname.log" >&2; exit 1; }
+  done
+  # The scans of simulated drives are large (~16 MB per frame) and no longer needed.
+  if [[ "$kind" == simulated ]]; then rm -rf "$dir/velodyne"; fi
+done < "$DS"
+
+# --- segmenter per-class IoU (simulated worlds, exact labels as truth) ---------
+echo "== segmenter IoU"
+if [[ $QUICK == 1 ]]; then miou_frames=1; else miou_frames=5; fi
+SKIP_BUILD=1 BUILD_DIR="$BUILD_DIR" scripts/segmenter_miou.sh "$miou_frames" "$SEED" > "$OUT/segmenter_iou.md"
+
+# --- the page ----------------------------------------------------------------
+mode=full
+[[ $QUICK == 1 ]] && mode=quick
+args=("$OUT" --mode "$mode" --seconds $(( $(date +%s) - start )))
+[[ $PLOTS == 1 ]] && args+=(--figures "$OUT/figures")
+/usr/bin/python3 scripts/reproduce_report.py "${args[@]}" > "$OUT/results.md"
+if [[ $QUICK == 1 ]]; then
+  if [[ $CHECK == 1 ]]; then
+    if ! diff -u docs/results_quick.md "$OUT/results.md"; then
+      echo "reproduce.sh: the --quick results differ from docs/results_quick.md (above);" \
+           "rerun scripts/reproduce.sh --quick and commit docs/results_quick.md if the change is intended" >&2
+      exit 1
+    fi
+    echo "== docs/results_quick.md matches this build's --quick run"
+  else
+    cp "$OUT/results.md" docs/results_quick.md
+    echo "== wrote docs/results_quick.md"
+  fi
+else
+  mkdir -p docs/figures
+  rm -f docs/figures/*.png
+  cp "$OUT"/figures/*.png docs/figures/
+  cp "$OUT/results.md" docs/results.md
+  /usr/bin/python3 scripts/reproduce_report.py "$OUT" --mode full --readme README.md > /dev/null
+  echo "== wrote docs/results.md, docs/figures/ and README.md's results block"
+fi
+echo "== done in $(( $(date +%s) - start )) s"
