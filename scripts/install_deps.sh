@@ -3,7 +3,9 @@
 # Usage: scripts/install_deps.sh [extra-package ...]   (run as root, or with sudo available)
 set -euo pipefail
 
-packages=(build-essential cmake libeigen3-dev libnanoflann-dev catch2 libbenchmark-dev libcli11-dev libyaml-cpp-dev "$@")
+# pkg-config and the four -dev packages: the optional bag readers (cmake/SemlioBags.cmake).
+packages=(build-essential cmake libeigen3-dev libnanoflann-dev catch2 libbenchmark-dev libcli11-dev libyaml-cpp-dev
+          pkg-config libbz2-dev liblz4-dev libzstd-dev libsqlite3-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

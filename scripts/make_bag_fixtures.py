@@ -31,9 +31,16 @@ import random
 import struct
 import sys
 
-import genpy
-import rosbag
-from sensor_msgs.msg import Imu, PointCloud2, PointField
+try:
+    import genpy
+    import rosbag
+    from sensor_msgs.msg import Imu, PointCloud2, PointField
+except ImportError:
+    # The ROS 1 reference implementation comes from Debian; install it once, then run again.
+    import subprocess
+    subprocess.check_call([os.path.join(os.path.dirname(os.path.abspath(__file__)), 'install_deps.sh'),
+                           'python3-rosbag', 'python3-sensor-msgs', 'python3-roslz4', 'python3-genpy'])
+    os.execv('/usr/bin/python3', ['/usr/bin/python3'] + sys.argv)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)

@@ -347,81 +347,104 @@ inline void pointcloud2_to_scan(const PointCloud2Msg& msg, Scan& out, const Poin
   std::size_t kept = 0;
   std::size_t nonfinite = 0;
   std::size_t zero = 0;
-  const bool f64 = xyz[0].type == 8;
-  for (std::size_t r = 0; r < msg.height; ++r) {
-    const std::uint8_t* row = msg.data.data() + r * std::size_t{msg.row_step};
-    for (std::size_t c = 0; c < msg.width; ++c) {
-      const std::uint8_t* p = row + c * std::size_t{msg.point_step};
-      float x, y, z;
-      if (f64) {
-        x = static_cast<float>(load<double>(p + xyz[0].offset, swap));
-        y = static_cast<float>(load<double>(p + xyz[1].offset, swap));
-        z = static_cast<float>(load<double>(p + xyz[2].offset, swap));
-      } else {
-        x = load<float>(p + xyz[0].offset, swap);
-        y = load<float>(p + xyz[1].offset, swap);
-        z = load<float>(p + xyz[2].offset, swap);
-      }
-      // A float64 coordinate beyond float's range becomes Inf here and is dropped as non-finite.
-      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
-        ++nonfinite;
-        continue;
-      }
-      if (config.drop_zero_points && x == 0.0F && y == 0.0F && z == 0.0F) {
-        ++zero;
-        continue;
-      }
-      float intensity = 0.0F;
-      if (inten.type != 0) {
-        intensity = static_cast<float>(load_number(p + inten.offset, inten.type, swap));
-        if (!std::isfinite(intensity)) {
+  const std::size_t ox = xyz[0].offset, oy = xyz[1].offset, oz = xyz[2].offset;
+  // The loop is compiled per coordinate type, byte order and float32-or-other
+  // intensity, so the common layouts (every driver above: float32 x y z
+  // intensity, host order) read their fields without per-point dispatch.
+  // Time and ring keep a runtime switch: their types vary by driver.
+  const auto loop = [&]<typename Coord, bool Swap, int InT>() {
+    for (std::size_t r = 0; r < msg.height; ++r) {
+      const std::uint8_t* row = msg.data.data() + r * std::size_t{msg.row_step};
+      for (std::size_t c = 0; c < msg.width; ++c) {
+        const std::uint8_t* p = row + c * std::size_t{msg.point_step};
+        const auto x = static_cast<float>(load<Coord>(p + ox, Swap));
+        const auto y = static_cast<float>(load<Coord>(p + oy, Swap));
+        const auto z = static_cast<float>(load<Coord>(p + oz, Swap));
+        // A float64 coordinate beyond float's range becomes Inf here and is dropped as non-finite.
+        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
           ++nonfinite;
           continue;
         }
-      }
-      double rel = 0.0;
-      if (time.type != 0) {
-        const double v = load_number(p + time.offset, time.type, swap);
-        if (!std::isfinite(v)) {
-          ++nonfinite;
+        if (config.drop_zero_points && x == 0.0F && y == 0.0F && z == 0.0F) {
+          ++zero;
           continue;
         }
-        if (absolute && !have_ref) {
-          // int64 holds epoch ns until 2262; a larger value is not a time.
-          if (nanoseconds && !(std::abs(v) < 9.2e18)) {
-            throw FormatError(where(msg, "time field '" + time.name + "' holds " + std::to_string(v) +
-                                             " ns at point " + std::to_string(r * msg.width + c) +
-                                             ", not an epoch time"));
+        float intensity = 0.0F;
+        if constexpr (InT != 0) {
+          if constexpr (InT == 7) {
+            intensity = load<float>(p + inten.offset, Swap);
+          } else {
+            intensity = static_cast<float>(load_number(p + inten.offset, inten.type, Swap));
           }
-          ref_value = v;
-          // The reference as a stamp: ns values split into sec + nsec first.
-          ref_s = nanoseconds ? ns_to_stamp_s(static_cast<std::int64_t>(v)) : v;
-          have_ref = true;
+          if (!std::isfinite(intensity)) {
+            ++nonfinite;
+            continue;
+          }
         }
-        rel = absolute ? v - ref_value : v;
-        if (nanoseconds) rel *= 1e-9;
-      }
-      std::uint16_t ring_value = 0;
-      if (ring.type != 0) {
-        const std::int64_t rv = load_integer(p + ring.offset, ring.type, swap);
-        if (rv < 0 || rv > std::numeric_limits<std::uint16_t>::max()) {
-          throw FormatError(where(msg, "ring field '" + ring.name + "' holds " + std::to_string(rv) + " at point " +
-                                           std::to_string(r * msg.width + c) + " (outside 0..65535)"));
+        double rel = 0.0;
+        if (time.type != 0) {
+          const double v = load_number(p + time.offset, time.type, Swap);
+          if (!std::isfinite(v)) {
+            ++nonfinite;
+            continue;
+          }
+          if (absolute && !have_ref) {
+            // int64 holds epoch ns until 2262; a larger value is not a time.
+            if (nanoseconds && !(std::abs(v) < 9.2e18)) {
+              throw FormatError(where(msg, "time field '" + time.name + "' holds " + std::to_string(v) +
+                                               " ns at point " + std::to_string(r * msg.width + c) +
+                                               ", not an epoch time"));
+            }
+            ref_value = v;
+            // The reference as a stamp: ns values split into sec + nsec first.
+            ref_s = nanoseconds ? ns_to_stamp_s(static_cast<std::int64_t>(v)) : v;
+            have_ref = true;
+          }
+          rel = absolute ? v - ref_value : v;
+          if (nanoseconds) rel *= 1e-9;
         }
-        ring_value = static_cast<std::uint16_t>(rv);
+        std::uint16_t ring_value = 0;
+        if (ring.type != 0) {
+          const std::int64_t rv = load_integer(p + ring.offset, ring.type, Swap);
+          if (rv < 0 || rv > std::numeric_limits<std::uint16_t>::max()) {
+            throw FormatError(where(msg, "ring field '" + ring.name + "' holds " + std::to_string(rv) + " at point " +
+                                             std::to_string(r * msg.width + c) + " (outside 0..65535)"));
+          }
+          ring_value = static_cast<std::uint16_t>(rv);
+        }
+        out.points[kept] = Point3f(x, y, z);
+        if constexpr (InT != 0) out.intensity[kept] = intensity;
+        if (ring.type != 0) out.rings[kept] = ring_value;
+        if (time.type != 0) {
+          // Relative to ref_s, in float: |rel| is a sweep's length, so float's
+          // 24 bits give ~10 ns; the subtraction of the minimum below is exact
+          // enough for deskewing (it is re-rounded once).
+          out.times_s[kept] = static_cast<float>(rel);
+          min_rel = std::min(min_rel, rel);
+        }
+        ++kept;
       }
-      out.points[kept] = Point3f(x, y, z);
-      if (inten.type != 0) out.intensity[kept] = intensity;
-      if (ring.type != 0) out.rings[kept] = ring_value;
-      if (time.type != 0) {
-        // Relative to ref_s, in float: |rel| is a sweep's length, so float's
-        // 24 bits give ~10 ns; the subtraction of the minimum below is exact
-        // enough for deskewing (it is re-rounded once).
-        out.times_s[kept] = static_cast<float>(rel);
-        min_rel = std::min(min_rel, rel);
-      }
-      ++kept;
     }
+  };
+  const auto by_intensity = [&]<typename Coord, bool Swap>() {
+    if (inten.type == 0) {
+      loop.template operator()<Coord, Swap, 0>();
+    } else if (inten.type == 7) {
+      loop.template operator()<Coord, Swap, 7>();
+    } else {
+      loop.template operator()<Coord, Swap, 1>();
+    }
+  };
+  if (xyz[0].type == 8) {
+    if (swap) {
+      by_intensity.template operator()<double, true>();
+    } else {
+      by_intensity.template operator()<double, false>();
+    }
+  } else if (swap) {
+    by_intensity.template operator()<float, true>();
+  } else {
+    by_intensity.template operator()<float, false>();
   }
   out.points.resize(kept);
   if (inten.type != 0) out.intensity.resize(kept);
