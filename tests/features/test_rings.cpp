@@ -161,6 +161,48 @@ TEST_CASE("rings on synthetic sweeps from a sensor table", "[features]") {
   }
 }
 
+TEST_CASE("a ring field the scan carries is kept when asked and valid", "[features]") {
+  std::vector<std::uint16_t> truth;
+  const semlio::SensorModel sensor = semlio::SensorModel::hdl32e();
+  semlio::Scan scan = synthetic_sweep(sensor, 300, /*top_down=*/true, truth);
+  // A driver's ring field that differs from what inference gives (Ouster
+  // counts from the top): kept as is, since only the grouping matters.
+  std::vector<std::uint16_t> driver(truth.size());
+  for (std::size_t i = 0; i < truth.size(); ++i) driver[i] = static_cast<std::uint16_t>(31 - truth[i]);
+  scan.rings = driver;
+  {
+    semlio::Scan s = scan;
+    const auto report = semlio::infer_rings(s, sensor, {.method = semlio::RingMethod::kAuto, .prefer_scan_rings = true});
+    CHECK(report.used == semlio::RingMethod::kFromScan);
+    CHECK(s.rings == driver);
+  }
+  {
+    semlio::Scan s = scan;
+    const auto report = semlio::infer_rings(s, sensor, {.method = semlio::RingMethod::kFromScan});
+    CHECK(report.used == semlio::RingMethod::kFromScan);
+    CHECK(s.rings == driver);
+  }
+  {  // default: re-inferred (an earlier call's rings are not a driver's)
+    semlio::Scan s = scan;
+    const auto report = semlio::infer_rings(s, sensor);
+    CHECK(report.used == semlio::RingMethod::kPointOrder);
+    CHECK(s.rings == truth);
+  }
+  {  // a ring beyond the table: inferred instead, or an error for kFromScan
+    semlio::Scan s = scan;
+    s.rings[5] = 32;
+    const auto report = semlio::infer_rings(s, sensor, {.method = semlio::RingMethod::kAuto, .prefer_scan_rings = true});
+    CHECK(report.used == semlio::RingMethod::kPointOrder);
+    CHECK(s.rings == truth);
+    semlio::Scan t = scan;
+    t.rings[5] = 40;
+    CHECK_THROWS_AS(semlio::infer_rings(t, sensor, {.method = semlio::RingMethod::kFromScan}), semlio::ValueError);
+    semlio::Scan none = scan;
+    none.rings.clear();
+    CHECK_THROWS_AS(semlio::infer_rings(none, sensor, {.method = semlio::RingMethod::kFromScan}), semlio::ValueError);
+  }
+}
+
 TEST_CASE("a stray point just below 2pi does not split a ring", "[features]") {
   semlio::SensorModel sensor;
   sensor.elevations_rad = {-0.1, 0.1};

@@ -58,16 +58,23 @@ enum class RingMethod : std::uint8_t {
   kAuto,        ///< point order when it yields exactly sensor.beams() rings, else elevation
   kPointOrder,  ///< azimuth wrap-around in point order (KITTI .bin); throws if the count mismatches
   kElevation,   ///< nearest beam of the sensor table by elevation
+  kFromScan,    ///< the scan's own ring field (a ROS driver's `ring`); throws if absent or out of the table
 };
 
 /// Settings of infer_rings().
 struct RingConfig {
   RingMethod method = RingMethod::kAuto;  ///< see RingMethod
+  /// Keep a ring field the scan already carries (a ROS driver's `ring`) when
+  /// every ring is below the table's beam count, whatever the method. Off by
+  /// default: infer_rings is also called again on scans whose rings an
+  /// earlier call filled, expecting them re-inferred. settings_for_sensor
+  /// (pipeline/presets.hpp) turns it on.
+  bool prefer_scan_rings = false;
 };
 
 /// What infer_rings() did.
 struct RingReport {
-  RingMethod used = RingMethod::kElevation;  ///< kPointOrder or kElevation
+  RingMethod used = RingMethod::kElevation;  ///< kFromScan, kPointOrder or kElevation
   std::size_t order_rings = 0;               ///< rings found from point order (0 if not tried)
 };
 
@@ -146,15 +153,39 @@ inline void ring_starts_from_order(const std::vector<Eigen::Vector3f>& pts,
   }
 }
 
+/// Whether scan carries a ring field with one ring per point, each below
+/// `beams` (a driver's ring field that the table can hold).
+inline bool has_valid_rings(const Scan& scan, std::size_t beams) {
+  if (!scan.has_rings() || scan.rings.size() != scan.size()) return false;
+  return std::all_of(scan.rings.begin(), scan.rings.end(), [&](std::uint16_t r) { return r < beams; });
+}
+
 /// Fills scan.rings (0 = lowest beam) by config.method, using `begins` as the
 /// workspace for ring starts (reused: no allocation once it has grown; the
-/// per-frame pipeline keeps one). Throws ConfigError for an invalid sensor and
-/// ValueError when kPointOrder finds a ring count other than sensor.beams()
-/// (the message names both counts).
+/// per-frame pipeline keeps one). A ring field the scan already carries (a
+/// ROS driver's `ring`) is kept by kFromScan, and by any method with
+/// RingConfig::prefer_scan_rings, when every ring is below sensor.beams()
+/// (report.used = kFromScan). Only the grouping into rings matters to the
+/// features (loam_features.hpp), so a driver that counts rings from the top
+/// (Ouster's row 0 is the highest beam) works as well. Throws ConfigError
+/// for an invalid sensor, ValueError when kPointOrder finds a ring count
+/// other than sensor.beams() (the message names both counts) and when
+/// kFromScan finds no valid ring field.
 inline RingReport infer_rings(Scan& scan, const SensorModel& sensor, const RingConfig& config,
                               std::vector<std::size_t>& begins) {
   sensor.validate();
   RingReport report;
+  if (config.prefer_scan_rings || config.method == RingMethod::kFromScan) {
+    if (has_valid_rings(scan, sensor.beams())) {
+      report.used = RingMethod::kFromScan;
+      return report;
+    }
+    if (config.method == RingMethod::kFromScan) {
+      throw ValueError("infer_rings: kFromScan needs a ring field with one ring per point below " +
+                       std::to_string(sensor.beams()) + ", got " + std::to_string(scan.rings.size()) +
+                       " rings for " + std::to_string(scan.size()) + " points");
+    }
+  }
   scan.rings.resize(scan.size());
   if (config.method != RingMethod::kElevation) {
     ring_starts_from_order(scan.points, begins);
