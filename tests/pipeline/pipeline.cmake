@@ -1,4 +1,5 @@
 set(SEMLIO_TESTS_pipeline_pipeline
   keyframe/test_keyframe_policies.cpp
   pipeline/test_odometry.cpp
-  pipeline/test_registration.cpp)
+  pipeline/test_registration.cpp
+  pipeline/test_sensor_settings.cpp)
