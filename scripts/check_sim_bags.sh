@@ -32,10 +32,11 @@ if [ -z "${SKIP_BUILD:-}" ]; then
 fi
 SIM="$BUILD_DIR/examples/semlio_simulate"
 [ -x "$SIM" ] || { echo "check_sim_bags: $SIM not found (set BUILD_DIR)" >&2; exit 1; }
-/usr/bin/python3 -c "import rosbag, genpy, sensor_msgs.msg, numpy" 2>/dev/null || {
-  echo "check_sim_bags: /usr/bin/python3 lacks rosbag/genpy/sensor_msgs/numpy (apt-get install -y python3-rosbag python3-sensor-msgs python3-numpy)" >&2
-  exit 1
-}
+# The reference readers: Debian's rosbag (installed here when missing) and
+# Node.js (nodejs from NodeSource or Debian ships npm with it).
+/usr/bin/python3 -c "import rosbag, genpy, sensor_msgs.msg, numpy" 2>/dev/null ||
+  scripts/install_deps.sh python3-rosbag python3-genpy python3-sensor-msgs python3-numpy
+command -v node > /dev/null || scripts/install_deps.sh nodejs npm
 if [ ! -d "$NODE_DIR/node_modules/@mcap/core" ] || [ ! -d "$NODE_DIR/node_modules/@foxglove/cdr" ] ||
    [ ! -d "$NODE_DIR/node_modules/@foxglove/wasm-zstd" ]; then
   [ -f "$NODE_DIR/package.json" ] || { echo "check_sim_bags: no $NODE_DIR/package.json to install the MCAP readers from" >&2; exit 1; }

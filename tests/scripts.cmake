@@ -65,3 +65,8 @@ semlio_add_script_test(loop_accuracy ${CMAKE_COMMAND} -E env REPORT_ONLY=1 FRAME
   ${SEMLIO_BASH} scripts/loop_accuracy.sh)
 semlio_add_script_test(long_run ${CMAKE_COMMAND} -E env REPORT_ONLY=1 FRAMES=60 WINDOW=12
   ${SEMLIO_BASH} scripts/long_run.sh)
+# The bag writers against the reference readers (python3-rosbag, @mcap/core
+# + @foxglove/cdr) on 3-frame drives of five sensors and field sets.
+if(SEMLIO_HAVE_BAGS)
+  semlio_add_script_test(check_sim_bags ${SEMLIO_BASH} scripts/check_sim_bags.sh 3)
+endif()
