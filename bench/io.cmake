@@ -5,3 +5,8 @@ if(SEMLIO_HAVE_BAGS)
   semlio_add_benchmark(bench_bag_read io/bench_bag_read.cpp)
   target_link_libraries(bench_bag_read PRIVATE semlio::io_bags)
 endif()
+# The same for MCAP (zstd chunks, CDR): bench/io/bench_mcap_read.cpp.
+if(SEMLIO_HAVE_BAGS)
+  semlio_add_benchmark(bench_mcap_read io/bench_mcap_read.cpp)
+  target_link_libraries(bench_mcap_read PRIVATE semlio::io_bags)
+endif()

@@ -22,6 +22,7 @@
 #include <semlio/io/bag/mcap.hpp>
 #include <semlio/io/cdr_msgs.hpp>
 #include <semlio/io/pcd.hpp>
+#include <semlio/io/pointcloud2.hpp>
 #include <semlio_test/data.hpp>
 #include <semlio_test/io_cloud_files.hpp>
 
@@ -316,6 +317,14 @@ TEST_CASE("MCAP KITTI: the three real scans decode to the PCD files' exact bytes
     CHECK(k == scan.size());
     CHECK(k + 1 == n);  // each KITTI raw scan holds exactly one (0,0,0) point (tests/data/kitti_raw/README.md)
     CHECK(mismatches == 0);
+
+    // The whole path a ROS 2 user takes (MCAP -> CDR -> Scan) gives the PCD reader's scan bit for bit.
+    const semlio::Scan from_bag = semlio::io::pointcloud2_to_scan(cloud);
+    REQUIRE(from_bag.size() == scan.size());
+    REQUIRE(from_bag.has_intensity());
+    CHECK(std::memcmp(from_bag.points.data(), scan.points.data(), scan.size() * sizeof(semlio::Point3f)) == 0);
+    CHECK(std::memcmp(from_bag.intensity.data(), scan.intensity.data(), scan.size() * sizeof(float)) == 0);
+    CHECK(from_bag.stamp_s == cloud.stamp_s);
   }
   CHECK_FALSE(reader.next(m));
 }
@@ -432,6 +441,29 @@ TEST_CASE("MCAP: CRC-32 of a known string", "[io][bags][mcap]") {
   const std::string longer = "The quick brown fox jumps over the lazy dog";
   CHECK(semlio::io::detail::mcap::crc32(reinterpret_cast<const std::uint8_t*>(longer.data()), longer.size()) ==
         0x414FA339U);
+  // The sliced tables against the bit-at-a-time definition, for every length
+  // 0-100 (every tail after the 16-byte blocks) and a few long buffers.
+  const auto bitwise = [](const std::vector<std::uint8_t>& b) {
+    std::uint32_t c = 0xFFFFFFFFU;
+    for (const std::uint8_t byte : b) {
+      c ^= byte;
+      for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320U & (0U - (c & 1U)));
+    }
+    return ~c;
+  };
+  std::mt19937 rng(3);
+  int mismatches = 0;
+  for (std::size_t n : {std::size_t{1000}, std::size_t{4096 + 7}, std::size_t{65536 + 13}}) {
+    std::vector<std::uint8_t> b(n);
+    for (std::uint8_t& v : b) v = static_cast<std::uint8_t>(rng());
+    mismatches += semlio::io::detail::mcap::crc32(b.data(), b.size()) != bitwise(b);
+  }
+  for (std::size_t n = 0; n <= 100; ++n) {
+    std::vector<std::uint8_t> b(n);
+    for (std::uint8_t& v : b) v = static_cast<std::uint8_t>(rng());
+    mismatches += semlio::io::detail::mcap::crc32(b.data(), b.size()) != bitwise(b);
+  }
+  CHECK(mismatches == 0);
 }
 
 TEST_CASE("MCAP: a damaged chunk fails its CRC unless the check is off", "[io][bags][mcap]") {
@@ -445,6 +477,32 @@ TEST_CASE("MCAP: a damaged chunk fails its CRC unless the check is off", "[io][b
   CHECK_THROWS_AS(read_all(reader), semlio::FormatError);
   McapReader unchecked(path, {.verify_chunk_crc = false});
   CHECK(read_all(unchecked).size() == 16);
+}
+
+TEST_CASE("MCAP: a chunk index that states a later start time than its chunk holds is a FormatError", "[io][bags][mcap]") {
+  DamagedCopy copy("small_lz4.mcap");
+  const std::string& b = copy.bytes;
+  // Walk the summary section (Footer.summary_start .. Footer.summary_offset_start).
+  std::uint64_t begin = 0;
+  std::uint64_t end = 0;
+  std::memcpy(&begin, b.data() + b.size() - 37 + 9, 8);
+  std::memcpy(&end, b.data() + b.size() - 37 + 17, 8);
+  REQUIRE(begin > 0);
+  REQUIRE(end > begin);
+  REQUIRE(end <= b.size());
+  std::vector<std::size_t> chunk_indexes;  // offsets of ChunkIndex contents
+  for (std::uint64_t off = begin; off < end;) {
+    std::uint64_t len = 0;
+    std::memcpy(&len, b.data() + off + 1, 8);
+    if (static_cast<unsigned char>(b[off]) == 0x08) chunk_indexes.push_back(static_cast<std::size_t>(off + 9));
+    off += 9 + len;
+  }
+  REQUIRE(chunk_indexes.size() >= 3);
+  // The first chunk (cloud 0 at t = 0) claims to start after every message of the file.
+  const std::uint64_t late = (kBaseSec + 10) * 1000000000ULL;
+  std::memcpy(copy.bytes.data() + chunk_indexes.front(), &late, 8);
+  McapReader reader(copy.write());
+  CHECK_THROWS_AS(read_all(reader), semlio::FormatError);
 }
 
 TEST_CASE("MCAP: not an MCAP file, a missing file, truncated and damaged files give typed errors", "[io][bags][mcap]") {
