@@ -23,6 +23,7 @@
 #include <semlio/io/cdr_msgs.hpp>
 #include <semlio/io/pcd.hpp>
 #include <semlio/io/pointcloud2.hpp>
+#include <semlio/io/ros1_msgs.hpp>
 #include <semlio_test/data.hpp>
 #include <semlio_test/io_cloud_files.hpp>
 
@@ -415,6 +416,31 @@ TEST_CASE("MCAP small files: the fixtures exercise the paths they are meant to",
   CHECK(order[2] == imu);
   CHECK(order[4] == imu);
   CHECK(order[5] != imu);
+}
+
+TEST_CASE("MCAP profile ros1: ROS 1 serialised messages are topics of encoding kRos1", "[io][bags][mcap]") {
+  McapReader reader(bag("small_ros1.mcap"));
+  const std::vector<BagTopic>& topics = reader.topics();
+  REQUIRE(topics.size() == 2);
+  const std::size_t points = topic_index(topics, "/points");
+  const std::size_t imu = topic_index(topics, "/imu");
+  CHECK(topics[points].type == "sensor_msgs/PointCloud2");
+  CHECK(topics[imu].type == "sensor_msgs/Imu");
+  CHECK(topics[points].encoding == MessageEncoding::kRos1);
+  CHECK(topics[imu].encoding == MessageEncoding::kRos1);
+  CHECK(topics[imu].message_count == 10);
+  int clouds = 0;
+  int imus = 0;
+  BagMessage m;
+  while (reader.next(m)) {
+    if (m.topic == points) {
+      check_small_cloud(semlio::io::parse_ros1_pointcloud2(m.data), clouds++);
+    } else {
+      check_small_imu(semlio::io::parse_ros1_imu(m.data), imus++);
+    }
+  }
+  CHECK(clouds == 3);
+  CHECK(imus == 10);
 }
 
 TEST_CASE("MCAP select: a subset, all again, and unknown names", "[io][bags][mcap]") {
