@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <random>
@@ -529,6 +530,19 @@ TEST_CASE("MCAP: a chunk index that states a later start time than its chunk hol
   std::memcpy(copy.bytes.data() + chunk_indexes.front(), &late, 8);
   McapReader reader(copy.write());
   CHECK_THROWS_AS(read_all(reader), semlio::FormatError);
+}
+
+TEST_CASE("MCAP: a rosbag2 folder with one .mcap file opens; one with two does not", "[io][bags][mcap]") {
+  semlio_test::CloudTempDir dir("mcap_folder");
+  const std::filesystem::path folder = dir.file("bag");
+  std::filesystem::create_directories(folder);
+  std::ofstream(folder / "metadata.yaml") << "rosbag2_bagfile_information:\n  storage_identifier: mcap\n";
+  CHECK_THROWS_AS(McapReader(folder.string()), semlio::IoError);
+  std::filesystem::copy_file(bag("small_lz4.mcap"), folder / "bag_0.mcap");
+  McapReader reader(folder.string());
+  CHECK(read_all(reader).size() == 13);
+  std::filesystem::copy_file(bag("small_lz4.mcap"), folder / "bag_1.mcap");
+  CHECK_THROWS_AS(McapReader(folder.string()), semlio::FormatError);
 }
 
 TEST_CASE("MCAP: not an MCAP file, a missing file, truncated and damaged files give typed errors", "[io][bags][mcap]") {

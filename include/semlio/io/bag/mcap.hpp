@@ -26,6 +26,8 @@
 /// one topic. Every length and offset read from the file is checked against
 /// the bytes present with overflow-safe arithmetic: a bad file throws
 /// FormatError naming the file and the byte offset, never over-reads.
+/// A rosbag2 folder with one .mcap file (ROS 2 Jazzy's default storage)
+/// opens like the file itself.
 /// Thread safety: none (one reader per thread).
 
 #include <algorithm>
@@ -34,6 +36,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
@@ -208,6 +211,23 @@ struct Later {
   }
 };
 
+/// `path` itself, or for a folder (a rosbag2 bag) its only *.mcap file.
+inline std::string resolve_path(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return path;
+  std::vector<fs::path> files;
+  for (const fs::directory_entry& e : fs::directory_iterator(path, ec)) {
+    if (e.path().extension() == ".mcap") files.push_back(e.path());
+  }
+  if (files.empty()) throw IoError(path + ": a folder without an .mcap file");
+  if (files.size() > 1) {
+    throw FormatError(path + ": a bag split into " + std::to_string(files.size()) +
+                      " .mcap files; open each file with its own McapReader");
+  }
+  return files.front().string();
+}
+
 }  // namespace detail::mcap
 
 /// Reads an MCAP file's messages in log-time order (see the file comment).
@@ -215,14 +235,17 @@ class McapReader {
  public:
   using Config = McapReaderConfig;
 
-  /// Opens `path` and reads its summary (or scans it). Throws IoError when it
-  /// cannot be opened, FormatError when it is not a valid MCAP file.
-  explicit McapReader(const std::string& path, const Config& config = {}) : path_(path), config_(config) {
-    file_.open(path, std::ios::binary);
-    if (!file_) throw IoError(path + ": cannot open MCAP file");
+  /// Opens `path` and reads its summary (or scans it). `path` may also be a
+  /// rosbag2 bag folder holding exactly one .mcap file (ROS 2 Jazzy's default
+  /// storage; split bags of several files are rejected). Throws IoError when
+  /// it cannot be opened, FormatError when it is not a valid MCAP file.
+  explicit McapReader(const std::string& path, const Config& config = {})
+      : path_(detail::mcap::resolve_path(path)), config_(config) {
+    file_.open(path_, std::ios::binary);
+    if (!file_) throw IoError(path_ + ": cannot open MCAP file");
     file_.seekg(0, std::ios::end);
     const std::streamoff end = file_.tellg();
-    if (end < 0) throw IoError(path + ": cannot determine the file size");
+    if (end < 0) throw IoError(path_ + ": cannot determine the file size");
     file_size_ = static_cast<std::uint64_t>(end);
     open();
     select({});
