@@ -3,8 +3,14 @@
 // label field; a KITTI .label beside the .bin with --labels FILE).
 //
 //   semlio_convert IN OUT [--labels IN.label] [--ascii]
+//
+// Exit 1 with a message naming the file for unreadable or invalid input, and
+// for a scan with no valid point (all NaN/Inf or (0,0,0)) written as .bin:
+// a KITTI .bin cannot hold an empty scan, so nothing is written. To .pcd and
+// .ply such a scan is written with 0 points. Exit 2 for a bad command line.
 
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -59,6 +65,16 @@ int main(int argc, char** argv) {
       return usage();
     }
     const std::string eout = extension(out);
+    // A KITTI .bin cannot hold an empty scan (the reader rejects a 0-byte
+    // file), so a scan whose every point was dropped is an error here, before
+    // anything is written. PCD and PLY carry empty scans (0 points) and
+    // read back as such.
+    if (eout == ".bin" && scan.empty()) {
+      std::cerr << "semlio_convert: " << in << ": no valid point to write to " << out << " ("
+                << stats.dropped_nonfinite << " non-finite and " << stats.dropped_zero
+                << " (0,0,0) points dropped); a KITTI .bin cannot hold an empty scan\n";
+      return 1;
+    }
     if (eout == ".bin") {
       semlio::io::write_kitti_bin(out, scan);
     } else if (eout == ".pcd") {
@@ -75,6 +91,10 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const semlio::Error& e) {
     std::cerr << "semlio_convert: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    // Last resort (e.g. std::bad_alloc): a message and exit 1, never an abort.
+    std::cerr << "semlio_convert: unexpected error converting " << in << " to " << out << ": " << e.what() << "\n";
     return 1;
   }
 }

@@ -16,16 +16,19 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <semlio/associate/nearest_k.hpp>
 #include <semlio/associate/normal_consistency.hpp>
+#include <semlio/io/detail/text.hpp>
 #include <semlio/io/kitti.hpp>
 #include <semlio/io/pcd.hpp>
 #include <semlio/io/ply.hpp>
@@ -45,12 +48,28 @@ semlio::Scan read_any(const std::string& path) {
   throw semlio::IoError(path + ": unknown extension (expected .bin, .pcd or .ply)");
 }
 
+/// --init x,y,z,roll,pitch,yaw: six finite numbers, each parsed whole (no
+/// trailing text); any other text is a ConfigError naming the option, the
+/// item and the whole value (std::stod said only "stod", and took "nan").
 semlio::SE3d parse_init(const std::string& text) {
   std::vector<double> v;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) v.push_back(std::stod(item));
-  if (v.size() != 6) throw semlio::ConfigError("--init needs 6 comma-separated numbers, got '" + text + "'");
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::optional<double> x = semlio::io::detail::to_double(semlio::io::detail::trim(item));
+    if (!x || !std::isfinite(*x)) {
+      throw semlio::ConfigError("--init item " + std::to_string(v.size() + 1) + " ('" + item +
+                                "') is not a finite number (value '" + text + "', expected x,y,z,roll,pitch,yaw)");
+    }
+    v.push_back(*x);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (v.size() != 6) {
+    throw semlio::ConfigError("--init needs 6 comma-separated numbers (x,y,z,roll,pitch,yaw), got " +
+                              std::to_string(v.size()) + " in '" + text + "'");
+  }
   const Eigen::Matrix3d R = (Eigen::AngleAxisd(v[5], Eigen::Vector3d::UnitZ()) *
                              Eigen::AngleAxisd(v[4], Eigen::Vector3d::UnitY()) *
                              Eigen::AngleAxisd(v[3], Eigen::Vector3d::UnitX()))
@@ -86,9 +105,18 @@ int main(int argc, char** argv) {
   app.add_option("--sensor", sensor, "beam table for ring inference")->check(CLI::IsMember({"hdl64e", "hdl32e"}));
   app.add_option("--kitti-correction", correction, "KITTI 0.205 deg vertical-angle fix")
       ->check(CLI::IsMember({"on", "off"}));
+  // CLI::Range lets NaN through (every comparison is false): check finiteness first.
+  const CLI::Validator finite(
+      [](const std::string& text) {
+        const std::optional<double> x = semlio::io::detail::to_double(text);
+        return x && std::isfinite(*x) ? std::string() : "'" + text + "' is not a finite number";
+      },
+      "FINITE");
   app.add_option("--ring-check", ring_check_deg, "corner lines within this angle of the scan cone are dropped [deg], 0 = off")
+      ->check(finite)
       ->check(CLI::Range(0.0, 89.0));
   app.add_option("--robust-corners", robust_corners_m, "Cauchy kernel scale on corner terms [m] (default 0.1, as the odometry presets), 0 = off")
+      ->check(finite)
       ->check(CLI::Range(0.0, 10.0));
   try {
     app.parse(argc, argv);
@@ -132,7 +160,9 @@ int main(int argc, char** argv) {
     std::cerr << "semlio_register: " << e.what() << "\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "semlio_register: " << e.what() << "\n";
-    return 2;
+    // Last resort (e.g. std::bad_alloc): a message and exit 1, never an abort.
+    std::cerr << "semlio_register: unexpected error registering " << source_path << " to " << target_path << ": "
+              << e.what() << "\n";
+    return 1;
   }
 }

@@ -21,6 +21,7 @@
 // Exit codes: 0 success; 1 error; 2 bad command line.
 
 #include <algorithm>
+#include <charconv>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -28,6 +29,7 @@
 #include <initializer_list>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
 
 #include <semlio/core/labels.hpp>
@@ -92,6 +94,17 @@ int time_kitti(const std::string& path, std::size_t repeat) {
 
 }  // namespace
 
+/// A non-negative whole number for `option`; anything else (std::stoul took
+/// "12abc" and "-1", and said only "stoul") is a ConfigError naming both.
+static std::uint64_t whole_number(std::string_view option, const std::string& text) {
+  std::uint64_t v = 0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || ec != std::errc() || ptr != text.data() + text.size()) {
+    throw semlio::ConfigError(std::string(option) + " needs a non-negative whole number, got '" + text + "'");
+  }
+  return v;
+}
+
 int main(int argc, char** argv) {
   semlio::sim::SimulatorConfig sc;
   sc.traffic = semlio::sim::TrafficLevel::kLight;
@@ -111,11 +124,11 @@ int main(int argc, char** argv) {
       if (a == "--world") {
         sc.world = semlio::sim::parse_world(value());
       } else if (a == "--frames") {
-        frames = std::stoul(value());
+        frames = whole_number(a, value());
       } else if (a == "--seed") {
-        sc.seed = std::stoull(value());
+        sc.seed = whole_number(a, value());
       } else if (a == "--stride") {
-        stride = std::max<std::size_t>(1, std::stoul(value()));
+        stride = std::max<std::size_t>(1, whole_number(a, value()));
       } else if (a == "--traffic") {
         const std::string t = value();
         if (t == "none") {
@@ -132,7 +145,7 @@ int main(int argc, char** argv) {
       } else if (a == "--kitti-bin") {
         kitti_bin = value();
       } else if (a == "--repeat") {
-        repeat = std::max<std::size_t>(1, std::stoul(value()));
+        repeat = std::max<std::size_t>(1, whole_number(a, value()));
       } else if (a == "--merged-ground") {
         merged = true;
       } else {
