@@ -429,4 +429,37 @@ inline std::vector<std::pair<std::string, std::string>> sensor_facts(const semli
   return f;
 }
 
+/// What configure_sensor() decided.
+struct SensorSetup {
+  semlio::SensorProfile profile;                  ///< the sensor the run uses
+  semlio::MotionProfile motion;                   ///< the platform
+  std::optional<semlio::BeamDetection> detection; ///< when profile: auto
+  std::vector<std::pair<std::string, std::string>> facts;  ///< sensor_facts(), for the summary and report.json
+};
+
+/// The whole sensor step of a tool, for its settings hook: with `profile:
+/// auto` detects the beam table from the first `detect_frames` scans
+/// (read_scan(i) -> semlio::Scan, i < frames), resolves the profile
+/// (resolve_sensor) and applies settings_for_sensor(profile, platform) on top
+/// of `settings`. The caller still sets what PipelineSettings does not hold
+/// (GeometricSegmenterConfig::sensor_height_m = profile.mount_height_m) and
+/// the IMU (SensorYaml::apply_imu, T_imu_lidar). Throws ConfigError as
+/// resolve_sensor.
+template <typename ReadScan>
+SensorSetup configure_sensor(const SensorYaml& y, std::size_t frames, ReadScan&& read_scan,
+                             semlio::PipelineSettings& settings, std::size_t detect_frames = 3) {
+  SensorSetup out;
+  if (y.detect) {
+    semlio::BeamDetector detector;
+    for (std::size_t i = 0; i < std::min(frames, detect_frames); ++i) detector.add(read_scan(i));
+    out.detection = detector.detect();
+  }
+  const semlio::BeamDetection* d = out.detection ? &*out.detection : nullptr;
+  out.profile = resolve_sensor(y, d);
+  out.motion = y.motion;
+  settings = semlio::settings_for_sensor(out.profile, out.motion, settings);
+  out.facts = sensor_facts(out.profile, out.motion, d);
+  return out;
+}
+
 }  // namespace semlio_examples

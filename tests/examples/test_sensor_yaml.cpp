@@ -1,7 +1,9 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 
 #include <semlio/core/error.hpp>
@@ -159,6 +161,41 @@ TEST_CASE("sensor YAML: profile auto takes the detected table", "[examples]") {
   CHECK_THROWS_AS(semlio_examples::resolve_sensor(y, nullptr), semlio::ConfigError);
   const auto facts = semlio_examples::sensor_facts(p, y.motion, &d);
   CHECK(facts.front() == std::pair<std::string, std::string>{"profile", "detected-4"});
+}
+
+TEST_CASE("sensor YAML: configure_sensor detects, resolves and applies the settings", "[examples]") {
+  // Four beams 5 deg apart on a 10 m cylinder: detection must find them.
+  const auto scan = [](std::size_t) {
+    semlio::Scan s;
+    for (const double el_deg : {-10.0, -5.0, 0.0, 5.0}) {
+      for (int c = 0; c < 720; ++c) {
+        const double az = 2.0 * std::numbers::pi * c / 720.0;
+        const double el = el_deg * kDeg;
+        s.points.emplace_back(static_cast<float>(10.0 * std::cos(az)), static_cast<float>(10.0 * std::sin(az)),
+                              static_cast<float>(10.0 * std::tan(el)));
+      }
+    }
+    return s;
+  };
+  semlio::PipelineSettings settings;
+  const auto setup = semlio_examples::configure_sensor(parse("sensor:\n  profile: auto\n  platform: hand_held\n"), 10,
+                                                       scan, settings);
+  REQUIRE(setup.detection);
+  CHECK(setup.detection->separable);
+  REQUIRE(setup.profile.beams.beams() == 4);
+  CHECK(setup.profile.beams.elevations_rad[1] == Approx(-5.0 * kDeg).margin(1e-3 * kDeg));
+  CHECK(settings.odometry.sensor.elevations_rad == setup.profile.beams.elevations_rad);
+  CHECK(settings.odometry.max_angular_rate_radps == 2.0);
+  CHECK_FALSE(settings.odometry.preprocess.crop_ego_box);
+  CHECK(std::find(setup.facts.begin(), setup.facts.end(),
+                  std::pair<std::string, std::string>{"detection", "elevation"}) != setup.facts.end());
+  // A named profile reads no scan.
+  semlio::PipelineSettings named;
+  const auto none = [](std::size_t) -> semlio::Scan { throw std::logic_error("no scan expected"); };
+  const auto vlp = semlio_examples::configure_sensor(parse("sensor:\n  profile: vlp16\n"), 10, none, named);
+  CHECK_FALSE(vlp.detection);
+  CHECK(named.odometry.sensor.beams() == 16);
+  CHECK(named.odometry.preprocess.crop_ego_box);
 }
 
 TEST_CASE("sensor YAML: bad values name the file, the line and the key", "[examples]") {
