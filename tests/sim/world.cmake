@@ -2,6 +2,7 @@ set(SEMLIO_TESTS_sim_world
   sim/test_geometry.cpp
   sim/test_bvh.cpp
   sim/test_lidar.cpp
+  sim/test_sensors.cpp
   sim/test_world.cpp
   sim/test_revisit.cpp
   sim/test_simulator.cpp
