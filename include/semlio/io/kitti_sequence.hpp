@@ -42,6 +42,10 @@ struct KittiSequenceConfig {
   std::string ground_truth_path;
   /// Frame period used for stamps when there is no times.txt [s] (HDL-64E: 10 Hz).
   double nominal_period_s = 0.1;
+  /// A gap in the frame numbering (a deleted scan): false = FormatError on
+  /// construction; true = the missing numbers are frames of their own that
+  /// is_missing() reports and read() refuses, so one lost file costs one frame.
+  bool allow_gaps = false;
 };
 
 /// A sequence directory: the frame list, calib and times are read on
@@ -82,6 +86,17 @@ class KittiSequence {
   [[nodiscard]] std::size_t size() const noexcept { return stems_.size(); }
   /// The sequence directory (normalised, no trailing separator).
   [[nodiscard]] const std::string& directory() const noexcept { return dir_; }
+  /// True when frame i's scan file is absent (a gap; only with allow_gaps).
+  [[nodiscard]] bool is_missing(std::size_t i) const {
+    check_index(i);
+    return missing_[i] != 0;
+  }
+  /// Number of frames whose scan file is absent.
+  [[nodiscard]] std::size_t missing_count() const noexcept {
+    std::size_t n = 0;
+    for (const char m : missing_) n += m != 0 ? 1U : 0U;
+    return n;
+  }
   /// Path of frame i's scan.
   [[nodiscard]] std::string scan_path(std::size_t i) const {
     check_index(i);
@@ -110,6 +125,7 @@ class KittiSequence {
   /// empty scan, missing label file, label count mismatch).
   [[nodiscard]] Scan read(std::size_t i, ReadStats* stats = nullptr) const {
     check_index(i);
+    if (missing_[i] != 0) throw IoError(detail::where(scan_path(i), 0, "scan file is missing (gap in the frame numbering)"));
     Scan scan =
         read_kitti_scan(scan_path(i), has_labels_ ? std::optional<std::string>(label_path(i)) : std::nullopt, stats);
     scan.stamp_s = stamp(i);
@@ -234,13 +250,24 @@ class KittiSequence {
     if (by_number.empty()) throw FormatError(detail::where(velodyne.string(), 0, "no .bin scans"));
     std::uint64_t expected = 0;
     for (const auto& [number, stem] : by_number) {
-      if (number != expected) {
+      if (number != expected && !config_.allow_gaps) {
         const std::string missing = detail::frame_stem(expected, static_cast<int>(width)) + ".bin";
         throw FormatError(detail::where((velodyne / missing).string(), 0,
                                         "gap in frame numbering: frame " + std::to_string(expected) +
                                             " is missing (next present: " + stem + ".bin)"));
       }
+      // A gap of more than 10 million frames is a misnamed file, not lost scans.
+      if (number - expected > 10'000'000U) {
+        throw FormatError(detail::where(velodyne.string(), 0,
+                                        "frame numbering jumps from " + std::to_string(expected) + " to " + stem +
+                                            ".bin: not a sequence of frames"));
+      }
+      for (; expected < number; ++expected) {
+        stems_.push_back(detail::frame_stem(expected, static_cast<int>(width)));
+        missing_.push_back(1);
+      }
       stems_.push_back(stem);
+      missing_.push_back(0);
       ++expected;
     }
   }
@@ -269,6 +296,7 @@ class KittiSequence {
   Config config_;
   std::string dir_;
   std::vector<std::string> stems_;  // file stem of frame i ("000042")
+  std::vector<char> missing_;       // 1: frame i's scan file is absent (allow_gaps)
   bool has_labels_ = false;
   std::optional<Calibration> calib_;
   std::vector<double> times_;

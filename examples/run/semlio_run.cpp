@@ -1,0 +1,143 @@
+// semlio_run: the odometry on any input semlio reads -- a KITTI odometry
+// folder, a KITTI raw drive as published, a folder of PCD / PLY / .bin scans,
+// a ROS 1 bag, a ROS 2 bag (MCAP or sqlite3) -- with semlio_kitti's options,
+// outputs, summary and report.json (whose "input" object records the format,
+// topics and sensor, and how each was decided).
+
+#include <CLI/CLI.hpp>
+
+#include <memory>
+#include <string>
+
+#include "file_sources.hpp"
+#include "frame_source.hpp"
+#include "odometry_tool.hpp"
+#include "sensor_yaml.hpp"
+#if defined(SEMLIO_HAVE_BAGS)
+#include "bag_source.hpp"
+#endif
+
+namespace {
+
+bool is_yaml_file(const std::string& s) {
+  const auto ends = [&s](const char* e) {
+    const std::string x(e);
+    return s.size() > x.size() && s.compare(s.size() - x.size(), x.size(), x) == 0;
+  };
+  return ends(".yaml") || ends(".yml");
+}
+
+// The sensor of a run (--sensor, --platform): a named profile, a sensor YAML,
+// or auto -- KITTI scans keep the HDL-64E point-order rings; any other input
+// gets the beam table detected from its first scans (from the cloud's ring
+// field when it has one). Applied on top of the presets' settings, before
+// the user's --config.
+void decide_sensor(const std::string& sensor, const std::string& platform, semlio_examples::FrameSource& source,
+                   semlio_examples::RunContext& ctx) {
+  semlio_examples::SensorYaml y;
+  if (is_yaml_file(sensor)) {
+    y = semlio_examples::load_sensor_yaml(sensor);
+  } else if (sensor == "auto") {
+    if (source.kitti_scans()) {
+      ctx.sensor_facts = {{"profile", "hdl64e"}, {"decided_by", "auto: KITTI HDL-64E scans, rings from point order"}};
+      if (!platform.empty() && platform != "vehicle") {
+        ctx.settings = semlio::settings_for_sensor(semlio::sensor_profile("hdl64e"), semlio::motion_profile(platform),
+                                                   ctx.settings);
+      }
+      return;
+    }
+    y.detect = true;
+  } else {
+    y.sensor = semlio::sensor_profile(sensor);
+  }
+  if (!platform.empty()) y.motion = semlio::motion_profile(platform);
+  std::optional<semlio::BeamDetection> detection;
+  if (y.detect) {
+    const std::vector<semlio::Scan> scans = source.first_scans(3);
+    if (scans.empty()) throw semlio::FormatError(source.facts().path + ": no readable scan to detect the beams from");
+    detection = semlio::detect_beams(scans);
+  }
+  const semlio::SensorProfile profile = semlio_examples::resolve_sensor(y, detection ? &*detection : nullptr);
+  const bool kitti_correction = ctx.settings.odometry.kitti_vertical_correction;
+  ctx.settings = semlio::settings_for_sensor(profile, y.motion, ctx.settings);
+  ctx.settings.odometry.kitti_vertical_correction = kitti_correction;
+  ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, detection ? &*detection : nullptr);
+  ctx.sensor_facts.emplace_back("decided_by", is_yaml_file(sensor) ? "--sensor " + sensor
+                                              : sensor == "auto"   ? std::string("auto: beams detected from the first scans")
+                                                                   : "--sensor " + sensor);
+  if (y.T_imu_lidar) ctx.T_imu_lidar = y.T_imu_lidar;
+  y.apply_imu(ctx.lc.imu);
+}
+
+struct InputOptions {
+  std::string input;
+  std::string format = "auto";
+  std::string lidar_topic;
+  std::string imu_topic;
+  std::string sensor = "auto";
+  std::string platform;
+  std::string gt;
+  std::string calib;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  semlio_examples::RunOptions opt;
+  InputOptions in;
+  CLI::App app{"semlio_run: semantic lidar(-inertial) odometry on KITTI, KITTI raw, scan folders and ROS 1 / ROS 2 bags"};
+  app.footer(
+      "Outputs in OUT/ as semlio_kitti's: poses.txt, poses_odom.txt, poses_tum.txt, keyframes.txt, map.ply, report.json.\n"
+      "Formats: kitti (velodyne/ + calib.txt, times.txt), kitti-raw (a YYYY_MM_DD_drive_NNNN_sync folder as published),\n"
+      "folder (.pcd/.ply/.bin files sorted by the number in their names, optional times.txt and poses.txt),\n"
+      "bag (ROS 1), mcap and db3 (ROS 2: sensor_msgs/PointCloud2 and sensor_msgs/Imu).");
+  app.add_option("--input", in.input, "the data: a folder, a .bag, a .mcap, a .db3 or a rosbag2 folder")->required();
+  app.add_option("--format", in.format, "input format (auto: detected from the path)")
+      ->check(CLI::IsMember({"auto", "kitti", "kitti-raw", "folder", "bag", "mcap", "db3"}));
+  app.add_option("--lidar-topic", in.lidar_topic, "PointCloud2 topic of a bag (default: the only one)");
+  app.add_option("--imu-topic", in.imu_topic, "Imu topic of a bag (default: the only one, if any)");
+  app.add_option("--sensor", in.sensor,
+                 "lidar: a profile name (hdl64e, vlp16, os1-64, ...), auto (the cloud's ring field, else KITTI point "
+                 "order, else beams detected from the data), or a sensor YAML file");
+  app.add_option("--platform", in.platform,
+                 "how the sensor is carried: vehicle (default; KITTI's gates) or hand_held (up to 2 m/s and 2 rad/s "
+                 "between frames); default: the sensor YAML's platform")
+      ->check(CLI::IsMember({"vehicle", "hand_held"}));
+  app.add_option("--gt", in.gt, "ground-truth poses (KITTI 3x4 or TUM); default: the input's own, if any");
+  app.add_option("--calib", in.calib, "calib.txt (kitti) or the folder of calib_*.txt (kitti-raw)");
+  semlio_examples::add_run_options(app, opt);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  return semlio_examples::run_tool("semlio_run", opt, [&]() -> std::unique_ptr<semlio_examples::FrameSource> {
+    std::string format = in.format;
+    std::string why = "--format";
+    if (format == "auto") std::tie(format, why) = semlio_examples::detect_format(in.input);
+    std::unique_ptr<semlio_examples::FrameSource> source;
+    if (format == "kitti") {
+      semlio_examples::SourceConfig sc;
+      sc.labels = (opt.labels == "none" || opt.labels == "geometric") ? "" : opt.labels;
+      sc.ground_truth_path = in.gt;
+      sc.calib_path = in.calib;
+      sc.allow_missing_frames = opt.missing_frames == "empty";
+      source = std::make_unique<semlio_examples::KittiFolderSource>(in.input, sc);
+    } else if (format == "kitti-raw") {
+      source = std::make_unique<semlio_examples::KittiRawSource>(in.input, in.calib);
+    } else if (format == "folder") {
+      source = std::make_unique<semlio_examples::ScanFolderSource>(in.input, in.gt);
+    } else {
+#if defined(SEMLIO_HAVE_BAGS)
+      source = semlio_examples::open_bag_source(in.input, format, in.lidar_topic, in.imu_topic, in.gt);
+#else
+      throw semlio::ConfigError(in.input + ": this build has no bag readers (install libbz2-dev liblz4-dev "
+                                "libzstd-dev libsqlite3-dev and reconfigure)");
+#endif
+    }
+    source->add_fact_front("format", why);
+    return source;
+  }, [&](semlio_examples::FrameSource& source, semlio_examples::RunContext& ctx) {
+    decide_sensor(in.sensor, in.platform, source, ctx);
+  });
+}
