@@ -17,7 +17,6 @@
 #include <string>
 #include <vector>
 
-#include <semlio/features/beam_detection.hpp>
 #include <semlio/io/kitti.hpp>
 #include <semlio/io/trajectory.hpp>
 #include <semlio/pipeline/presets.hpp>
@@ -41,25 +40,14 @@ int main(int argc, char** argv) {
       return dir + name;
     };
     const semlio_examples::SensorYaml y = semlio_examples::load_sensor_yaml(argv[2]);
-    std::optional<semlio::BeamDetection> detection;
-    if (y.detect) {
-      semlio::BeamDetector detector;
-      for (std::size_t i = 0; i < std::min<std::size_t>(3, times.size()); ++i) {
-        detector.add(semlio::io::read_kitti_bin(bin(i)));
-      }
-      detection = detector.detect();
-    }
-    const semlio::SensorProfile profile =
-        semlio_examples::resolve_sensor(y, detection ? &*detection : nullptr);
-    const semlio::PipelineSettings settings = semlio::settings_for_sensor(profile, y.motion);
-
+    semlio::PipelineSettings settings;
+    const semlio_examples::SensorSetup setup = semlio_examples::configure_sensor(
+        y, times.size(), [&](std::size_t i) { return semlio::io::read_kitti_bin(bin(i)); }, settings);
     std::ofstream facts(out + "/sensor.txt");
-    for (const auto& [k, v] : semlio_examples::sensor_facts(profile, y.motion, detection ? &*detection : nullptr)) {
-      facts << k << " " << v << "\n";
-    }
-    if (detection) {
-      facts << "detection_beams " << detection->beams() << "\n";
-      facts << "detection_median_spacing_deg " << detection->median_spacing_rad * 180.0 / std::numbers::pi << "\n";
+    for (const auto& [k, v] : setup.facts) facts << k << " " << v << "\n";
+    if (setup.detection) {
+      facts << "detection_beams " << setup.detection->beams() << "\n";
+      facts << "detection_median_spacing_deg " << setup.detection->median_spacing_rad * 180.0 / std::numbers::pi << "\n";
     }
 
     std::vector<semlio::SE3d> poses;
