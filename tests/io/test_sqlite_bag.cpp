@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -175,6 +176,30 @@ TEST_CASE("rosbag2 sqlite3: what is not a rosbag2 sqlite3 bag gives typed errors
         read_all(r);
       }(),
       semlio::FormatError);
+}
+
+TEST_CASE("rosbag2 sqlite3: random byte damage gives messages or a semlio::Error, nothing else", "[io][bags][sqlite]") {
+  const std::string full = semlio_test::read_bytes(kBag + "/ros2_sqlite_0.db3");
+  REQUIRE(full.size() > 4096);
+  semlio_test::CloudTempDir dir("sqlite_fuzz");
+  std::mt19937 rng(5);
+  int errors = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    std::string b = full;
+    // Damage the first page (schema, header) in a third of the trials: it is where a lie hurts most.
+    const std::size_t span = trial % 3 == 0 ? 4096 : b.size();
+    for (int f = 0; f < 1 + trial % 4; ++f) {
+      b[std::uniform_int_distribution<std::size_t>(0, span - 1)(rng)] =
+          static_cast<char>(std::uniform_int_distribution<int>(0, 255)(rng));
+    }
+    try {
+      SqliteBagReader reader(dir.write("fuzz_" + std::to_string(trial) + ".db3", b));
+      read_all(reader);
+    } catch (const semlio::Error&) {
+      ++errors;
+    }
+  }
+  CHECK(errors > 0);
 }
 
 TEST_CASE("rosbag2 sqlite3: topics of another serialization format are not listed", "[io][bags][sqlite]") {
