@@ -1,8 +1,10 @@
 #pragma once
 // A minimal streaming JSON writer for the example binaries (no dependency).
-// Keys and strings are escaped; non-finite numbers are written as null.
+// Keys and strings are escaped; non-finite numbers are written as null and
+// counted, so the output is always valid JSON (RFC 8259 has no inf or nan).
 
 #include <cmath>
+#include <cstddef>
 #include <cstdio>
 #include <ostream>
 #include <string>
@@ -30,6 +32,8 @@ class JsonWriter {
     return *this;
   }
 
+  /// A number as JSON: finite values in "%.10g" (a finite double never prints
+  /// as "inf"/"nan"), non-finite ones as null, counted in non_finite_count().
   JsonWriter& value(double v) {
     comma();
     if (std::isfinite(v)) {
@@ -38,9 +42,14 @@ class JsonWriter {
       out_ << buf;
     } else {
       out_ << "null";
+      ++non_finite_;
     }
     return *this;
   }
+  JsonWriter& value(float v) { return value(static_cast<double>(v)); }
+
+  /// Non-finite numbers written as null so far (callers report it as a status).
+  [[nodiscard]] std::size_t non_finite_count() const { return non_finite_; }
   JsonWriter& value(long long v) {
     comma();
     out_ << v;
@@ -129,6 +138,7 @@ class JsonWriter {
   std::ostream& out_;
   std::vector<bool> first_;
   bool pending_key_ = false;
+  std::size_t non_finite_ = 0;
 };
 
 }  // namespace semlio_examples

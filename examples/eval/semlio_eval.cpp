@@ -34,7 +34,9 @@
 // Exit codes: 0 success; 1 unreadable or invalid input (message names the
 // file, line and value); 2 bad command line (usage printed).
 //
-// JSON written by --json (all lengths in metres, all numbers finite):
+// JSON written by --json (all lengths in metres; always valid JSON: a
+// non-finite number is written as null, counted in "non_finite_count" and
+// flagged by "numbers": "non_finite_written_as_null" instead of "finite"):
 // {
 //   "ground_truth": "<path>",          // --gt
 //   "estimate": "<path>",              // --est
@@ -99,6 +101,8 @@
 #include <semlio/eval/time_match.hpp>
 #include <semlio/io/kitti.hpp>
 #include <semlio/io/trajectory.hpp>
+
+#include "../common/json_writer.hpp"
 
 namespace {
 
@@ -229,27 +233,12 @@ std::vector<std::size_t> read_subset(const std::string& path, std::size_t frame_
   return frames;
 }
 
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      out.push_back('\\');
-      out.push_back(c);
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
-      out += buf;
-    } else {
-      out.push_back(c);
-    }
-  }
-  out.push_back('"');
-  return out;
-}
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.12g", v);
+// "%.*f" of a finite number; "non-finite" otherwise (huge poses can overflow
+// the metrics: the table says so instead of printing nan or inf).
+std::string fixed(double v, int digits) {
+  if (!std::isfinite(v)) return "non-finite";
+  char buf[400];  // 1e308 has 309 digits before the point
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
   return buf;
 }
 
@@ -265,42 +254,51 @@ struct Counts {
   std::size_t subset_unmatched = 0;
 };
 
+// Written through JsonWriter, which never emits non-JSON: a non-finite
+// number (e.g. an ATE of 1e308-metre poses overflowing to inf) becomes null
+// and "numbers" says so, so that a consumer can tell null from a bug.
 void write_json(const std::string& path, const Options& o, const std::string& format, const Counts& counts,
                 const eval::AteReport& ate, const std::optional<eval::KittiMetricReport>& kitti) {
   std::ostringstream j;
-  j << "{\n";
-  j << "  \"ground_truth\": " << json_string(o.gt) << ",\n";
-  j << "  \"estimate\": " << json_string(o.est) << ",\n";
-  j << "  \"format\": " << json_string(format) << ",\n";
-  j << "  \"frame\": " << json_string(o.calib.empty() ? "as_given" : "lidar_to_camera") << ",\n";
-  j << "  \"alignment\": " << json_string(eval::to_string(o.alignment)) << ",\n";
-  j << "  \"poses\": {\"ground_truth\": " << counts.gt << ", \"estimate\": " << counts.est
-    << ", \"matched\": " << counts.matched << ", \"evaluated\": " << ate.count
-    << ", \"skipped\": " << counts.subset_unmatched << "},\n";
-  j << "  \"ate\": {\"rmse_m\": " << num(ate.rmse_m) << ", \"mean_m\": " << num(ate.mean_m)
-    << ", \"median_m\": " << num(ate.median_m) << ", \"max_m\": " << num(ate.max_m)
-    << ", \"scale\": " << num(ate.alignment.scale) << ", \"status\": "
-    << json_string(eval::to_string(ate.alignment.status)) << ", \"T_gt_est\": [";
+  semlio_examples::JsonWriter w(j);
+  w.begin_object();
+  w.field("ground_truth", o.gt).field("estimate", o.est).field("format", format);
+  w.field("frame", o.calib.empty() ? "as_given" : "lidar_to_camera");
+  w.field("alignment", eval::to_string(o.alignment));
+  w.key("poses").begin_object();
+  w.field("ground_truth", counts.gt).field("estimate", counts.est).field("matched", counts.matched);
+  w.field("evaluated", ate.count).field("skipped", counts.subset_unmatched);
+  w.end_object();
+  w.key("ate").begin_object();
+  w.field("rmse_m", ate.rmse_m).field("mean_m", ate.mean_m).field("median_m", ate.median_m).field("max_m", ate.max_m);
+  w.field("scale", ate.alignment.scale).field("status", eval::to_string(ate.alignment.status));
+  w.key("T_gt_est").begin_array();
   const Eigen::Matrix4d M = ate.alignment.T_gt_est.matrix();
   for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 4; ++c) j << (r + c == 0 ? "" : ", ") << num(M(r, c));
+    for (int c = 0; c < 4; ++c) w.value(M(r, c));
   }
-  j << "]},\n";
-  j << "  \"kitti\": {\"status\": " << json_string(kitti_status(kitti));
+  w.end_array().end_object();
+  w.key("kitti").begin_object();
+  w.field("status", kitti_status(kitti));
   if (kitti) {
-    j << ", \"segments\": " << kitti->segment_count << ", \"translation_error_pct\": "
-      << num(kitti->translation_error_pct) << ", \"rotation_error_deg_per_m\": "
-      << num(kitti->rotation_error_deg_per_m) << ", \"rotation_error_deg_per_100m\": "
-      << num(kitti->rotation_error_deg_per_100m) << ", \"per_length\": [";
-    for (std::size_t i = 0; i < kitti->per_length.size(); ++i) {
-      const auto& p = kitti->per_length[i];
-      j << (i == 0 ? "" : ", ") << "{\"length_m\": " << num(p.length_m) << ", \"segments\": " << p.count
-        << ", \"translation_error_pct\": " << num(p.translation_error_pct)
-        << ", \"rotation_error_deg_per_100m\": " << num(p.rotation_error_deg_per_100m) << "}";
+    w.field("segments", kitti->segment_count).field("translation_error_pct", kitti->translation_error_pct);
+    w.field("rotation_error_deg_per_m", kitti->rotation_error_deg_per_m);
+    w.field("rotation_error_deg_per_100m", kitti->rotation_error_deg_per_100m);
+    w.key("per_length").begin_array();
+    for (const auto& p : kitti->per_length) {
+      w.begin_object();
+      w.field("length_m", p.length_m).field("segments", p.count);
+      w.field("translation_error_pct", p.translation_error_pct);
+      w.field("rotation_error_deg_per_100m", p.rotation_error_deg_per_100m);
+      w.end_object();
     }
-    j << "]";
+    w.end_array();
   }
-  j << "}\n}\n";
+  w.end_object();
+  w.field("numbers", w.non_finite_count() == 0 ? "finite" : "non_finite_written_as_null");
+  w.field("non_finite_count", w.non_finite_count());
+  w.end_object();
+  j << '\n';
   std::ofstream out(path);
   if (!out) throw semlio::IoError(path + ": cannot open JSON output for writing");
   out << j.str();
@@ -387,17 +385,19 @@ int run(const Options& o) {
               o.calib.empty() ? "" : ", lidar->camera via calib");
   std::printf("  %-32s %12zu\n", "poses (ATE)", ate.count);
   if (counts.subset_unmatched > 0) std::printf("  %-32s %12zu\n", "frames skipped (no estimate)", counts.subset_unmatched);
-  std::printf("  %-32s %12.4f\n", "ATE RMSE [m]", ate.rmse_m);
-  std::printf("  %-32s %12.4f\n", "ATE mean [m]", ate.mean_m);
-  std::printf("  %-32s %12.4f\n", "ATE median [m]", ate.median_m);
-  std::printf("  %-32s %12.4f\n", "ATE max [m]", ate.max_m);
-  if (o.alignment == eval::Alignment::kSim3) std::printf("  %-32s %12.6f\n", "Sim3 scale", ate.alignment.scale);
+  std::printf("  %-32s %12s\n", "ATE RMSE [m]", fixed(ate.rmse_m, 4).c_str());
+  std::printf("  %-32s %12s\n", "ATE mean [m]", fixed(ate.mean_m, 4).c_str());
+  std::printf("  %-32s %12s\n", "ATE median [m]", fixed(ate.median_m, 4).c_str());
+  std::printf("  %-32s %12s\n", "ATE max [m]", fixed(ate.max_m, 4).c_str());
+  if (o.alignment == eval::Alignment::kSim3) {
+    std::printf("  %-32s %12s\n", "Sim3 scale", fixed(ate.alignment.scale, 6).c_str());
+  }
   if (ate.alignment.status != eval::AlignmentStatus::kOk) {
     std::printf("  %-32s %12s\n", "alignment status", eval::to_string(ate.alignment.status));
   }
   if (kitti && kitti->status == eval::KittiMetricStatus::kOk) {
-    std::printf("  %-32s %12.4f\n", "translational error [%]", kitti->translation_error_pct);
-    std::printf("  %-32s %12.4f\n", "rotational error [deg/100 m]", kitti->rotation_error_deg_per_100m);
+    std::printf("  %-32s %12s\n", "translational error [%]", fixed(kitti->translation_error_pct, 4).c_str());
+    std::printf("  %-32s %12s\n", "rotational error [deg/100 m]", fixed(kitti->rotation_error_deg_per_100m, 4).c_str());
     std::printf("  %-32s %12zu\n", "KITTI segments", kitti->segment_count);
   } else {
     std::printf("  %-32s %12s\n", "KITTI metric", kitti ? "no segments (trajectory < 100 m)"
