@@ -46,7 +46,6 @@ class JsonWriter {
     }
     return *this;
   }
-  JsonWriter& value(float v) { return value(static_cast<double>(v)); }
 
   /// Non-finite numbers written as null so far (callers report it as a status).
   [[nodiscard]] std::size_t non_finite_count() const { return non_finite_; }
