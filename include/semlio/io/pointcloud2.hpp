@@ -353,39 +353,55 @@ inline void pointcloud2_to_scan(const PointCloud2Msg& msg, Scan& out, const Poin
   // intensity, host order) read their fields without per-point dispatch.
   // Time and ring keep a runtime switch: their types vary by driver.
   const auto loop = [&]<typename Coord, bool Swap, int InT>() {
-    for (std::size_t r = 0; r < msg.height; ++r) {
-      const std::uint8_t* row = msg.data.data() + r * std::size_t{msg.row_step};
-      for (std::size_t c = 0; c < msg.width; ++c) {
-        const std::uint8_t* p = row + c * std::size_t{msg.point_step};
+    // Locals, not captured references: with references GCC reloaded the
+    // steps, offsets and counters from memory at every point (perf annotate).
+    // What remains is bound by memory traffic: ~1.9 MB read + written per
+    // 120k-point scan.
+    const std::uint8_t* const base = msg.data.data();
+    const std::size_t height = msg.height, width = msg.width;
+    const std::size_t row_step = msg.row_step, point_step = msg.point_step;
+    const std::size_t oi = inten.offset, ot = time.offset, orr = ring.offset;
+    const std::uint8_t time_type = time.type, ring_type = ring.type;
+    const bool drop_zero = config.drop_zero_points;
+    Point3f* const pts = out.points.data();
+    float* const inten_out = out.intensity.data();
+    std::uint16_t* const ring_out = out.rings.data();
+    float* const time_out = out.times_s.data();
+    std::size_t k = 0, bad = 0, zeros = 0;
+    double lo = min_rel;
+    for (std::size_t r = 0; r < height; ++r) {
+      const std::uint8_t* row = base + r * row_step;
+      for (std::size_t c = 0; c < width; ++c) {
+        const std::uint8_t* p = row + c * point_step;
         const auto x = static_cast<float>(load<Coord>(p + ox, Swap));
         const auto y = static_cast<float>(load<Coord>(p + oy, Swap));
         const auto z = static_cast<float>(load<Coord>(p + oz, Swap));
         // A float64 coordinate beyond float's range becomes Inf here and is dropped as non-finite.
         if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
-          ++nonfinite;
+          ++bad;
           continue;
         }
-        if (config.drop_zero_points && x == 0.0F && y == 0.0F && z == 0.0F) {
-          ++zero;
+        if (drop_zero && x == 0.0F && y == 0.0F && z == 0.0F) {
+          ++zeros;
           continue;
         }
         float intensity = 0.0F;
         if constexpr (InT != 0) {
           if constexpr (InT == 7) {
-            intensity = load<float>(p + inten.offset, Swap);
+            intensity = load<float>(p + oi, Swap);
           } else {
-            intensity = static_cast<float>(load_number(p + inten.offset, inten.type, Swap));
+            intensity = static_cast<float>(load_number(p + oi, inten.type, Swap));
           }
           if (!std::isfinite(intensity)) {
-            ++nonfinite;
+            ++bad;
             continue;
           }
         }
         double rel = 0.0;
-        if (time.type != 0) {
-          const double v = load_number(p + time.offset, time.type, Swap);
+        if (time_type != 0) {
+          const double v = load_number(p + ot, time_type, Swap);
           if (!std::isfinite(v)) {
-            ++nonfinite;
+            ++bad;
             continue;
           }
           if (absolute && !have_ref) {
@@ -404,27 +420,31 @@ inline void pointcloud2_to_scan(const PointCloud2Msg& msg, Scan& out, const Poin
           if (nanoseconds) rel *= 1e-9;
         }
         std::uint16_t ring_value = 0;
-        if (ring.type != 0) {
-          const std::int64_t rv = load_integer(p + ring.offset, ring.type, Swap);
+        if (ring_type != 0) {
+          const std::int64_t rv = load_integer(p + orr, ring_type, Swap);
           if (rv < 0 || rv > std::numeric_limits<std::uint16_t>::max()) {
             throw FormatError(where(msg, "ring field '" + ring.name + "' holds " + std::to_string(rv) + " at point " +
                                              std::to_string(r * msg.width + c) + " (outside 0..65535)"));
           }
           ring_value = static_cast<std::uint16_t>(rv);
         }
-        out.points[kept] = Point3f(x, y, z);
-        if constexpr (InT != 0) out.intensity[kept] = intensity;
-        if (ring.type != 0) out.rings[kept] = ring_value;
-        if (time.type != 0) {
+        pts[k] = Point3f(x, y, z);
+        if constexpr (InT != 0) inten_out[k] = intensity;
+        if (ring_type != 0) ring_out[k] = ring_value;
+        if (time_type != 0) {
           // Relative to ref_s, in float: |rel| is a sweep's length, so float's
           // 24 bits give ~10 ns; the subtraction of the minimum below is exact
           // enough for deskewing (it is re-rounded once).
-          out.times_s[kept] = static_cast<float>(rel);
-          min_rel = std::min(min_rel, rel);
+          time_out[k] = static_cast<float>(rel);
+          lo = std::min(lo, rel);
         }
-        ++kept;
+        ++k;
       }
     }
+    kept = k;
+    nonfinite = bad;
+    zero = zeros;
+    min_rel = lo;
   };
   const auto by_intensity = [&]<typename Coord, bool Swap>() {
     if (inten.type == 0) {
