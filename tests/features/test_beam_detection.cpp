@@ -90,6 +90,32 @@ TEST_CASE("beam detection finds the 64 beams of a simulated OS0 despite its beam
   CHECK(exact.rms_residual_rad < 0.01 * kDeg);
 }
 
+TEST_CASE("beam detection falls back to the best single scan when a smeared one hides the beams", "[features]") {
+  // A still sweep and a sweep whose points spread over the whole field of
+  // view (a fast turn, motion-compensated): pooled, the peaks explain too few
+  // points; the still sweep alone gives the table.
+  const semlio::SensorModel table = semlio::sensor_profile("os0-64").beams;
+  semlio::Scan smeared;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> el(-45.0 * kDeg, 45.0 * kDeg);
+  std::uniform_real_distribution<double> az(-std::numbers::pi, std::numbers::pi);
+  for (int i = 0; i < 200000; ++i) {
+    const double e = el(rng);
+    const double a = az(rng);
+    smeared.points.emplace_back(static_cast<float>(6.0 * std::cos(e) * std::cos(a)),
+                                static_cast<float>(6.0 * std::cos(e) * std::sin(a)), static_cast<float>(6.0 * std::sin(e)));
+  }
+  const semlio::BeamDetection d = semlio::detect_beams({smeared, room_sweep(table, 1024, 0.0)});
+  INFO(d.note);
+  CHECK(d.source == semlio::BeamSource::kElevation);
+  REQUIRE(d.beams() == 64);
+  CHECK(d.note.find("scan 1 alone") != std::string::npos);
+  for (std::size_t i = 0; i < 64; ++i) CHECK(d.elevations_rad[i] == Approx(table.elevations_rad[i]).margin(0.01 * kDeg));
+  CHECK(d.fit_fraction < 0.8);  // reported over every point, the smeared ones included
+  // The smeared sweep alone: not separable.
+  CHECK_FALSE(semlio::detect_beams({smeared}).separable);
+}
+
 TEST_CASE("beam detection resolves the VLP-32C's 1/3 deg beams near the horizon", "[features]") {
   const semlio::SensorModel table = semlio::sensor_profile("vlp32c").beams;
   const semlio::BeamDetection d = semlio::detect_beams({room_sweep(table, 1800, 0.0, 30.0, 20.0, 1.8, 30.0)});

@@ -21,7 +21,9 @@
 ///    cluster 0.4 deg above the 1 300-point -35.7 deg beam). Each beam sits at
 ///    the mean of the points within a quarter spacing of its peak. Accepted
 ///    when at least min_fit_fraction of the points lie within the tolerance
-///    (tolerance_rad, at most relative_tolerance x the median spacing).
+///    (tolerance_rad, at most relative_tolerance x the median spacing). When
+///    the scans pooled fail, the single scan that fits best is tried (a sweep
+///    taken during a fast turn smears its beams and hides the others').
 /// 3. kPointOrder: the KITTI layout (rings stored one after the other, cut
 ///    where the azimuth wraps, rings.hpp): accepted when every scan yields the
 ///    same ring count, between min_order_rings and max_beams.
@@ -200,6 +202,7 @@ class BeamDetector {
   void add(const Scan& scan) {
     scan.validate();
     ++scans_;
+    scan_begin_.push_back(elevations_.size());
     std::vector<std::size_t> begins;
     ring_starts_from_order(scan.points, begins);
     order_counts_.push_back(begins.size());
@@ -243,14 +246,44 @@ class BeamDetector {
       return d;
     }
 
-    // 2. Elevation clusters.
-    const std::vector<double> table = elevation_clusters(sorted, d);
-    if (table.size() >= 2 && table.size() <= config_.max_beams && d.elevation_fit_fraction >= config_.min_fit_fraction) {
+    // 2. Elevation clusters, of all scans together; else of the single scan
+    // that fits best (one sweep taken while the sensor turns fast smears its
+    // beams, and pooled with still ones it hides them all).
+    const auto accept = [&](const std::vector<double>& table, const BeamDetection& probe) {
+      return table.size() >= 2 && table.size() <= config_.max_beams &&
+             probe.elevation_fit_fraction >= config_.min_fit_fraction;
+    };
+    std::vector<double> table = elevation_clusters(sorted, d);
+    std::string which = "";
+    if (!accept(table, d) && scan_begin_.size() > 1) {
+      double best = -1.0;
+      for (std::size_t k = 0; k < scan_begin_.size(); ++k) {
+        const std::size_t b = scan_begin_[k];
+        const std::size_t e = k + 1 < scan_begin_.size() ? scan_begin_[k + 1] : elevations_.size();
+        if (e <= b) continue;
+        std::vector<double> one(elevations_.begin() + static_cast<std::ptrdiff_t>(b),
+                                elevations_.begin() + static_cast<std::ptrdiff_t>(e));
+        std::sort(one.begin(), one.end());
+        BeamDetection probe;
+        const std::vector<double> t = elevation_clusters(one, probe);
+        if (accept(t, probe) && probe.elevation_fit_fraction > best) {
+          best = probe.elevation_fit_fraction;
+          table = t;
+          which = " (scan " + std::to_string(k) + " alone; all " + std::to_string(scans_) + " together fit " +
+                  std::to_string(d.elevation_fit_fraction) + ")";
+        }
+      }
+      if (best >= 0.0) {
+        d.elevation_beams = table.size();
+        d.elevation_fit_fraction = best;
+      }
+    }
+    if (accept(table, d)) {
       d.source = BeamSource::kElevation;
       d.separable = true;
       d.elevations_rad = table;
-      fit(sorted, d);
-      d.note = std::to_string(d.beams()) + " beams separated by elevation";
+      fit(sorted, d);  // the fit reported is over every scan's points
+      d.note = std::to_string(d.beams()) + " beams separated by elevation" + which;
       return d;
     }
 
@@ -441,6 +474,7 @@ class BeamDetector {
   std::size_t scans_ = 0;
   bool all_rings_ = true;
   std::vector<double> elevations_;
+  std::vector<std::size_t> scan_begin_;  // first index of each scan's elevations
   std::vector<std::size_t> order_counts_;
   std::vector<RingSample> scan_ring_;
   std::vector<RingSample> order_ring_;
