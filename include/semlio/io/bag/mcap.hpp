@@ -315,6 +315,11 @@ class McapReader {
         read_at(item.data_offset, n, out.data.data(), "message");
       } else {
         const std::vector<std::uint8_t>& records = chunk_records(item.chunk);
+        // A chunk decompressed again after eviction must hold the message
+        // where it did (it will, unless the file changed under the reader).
+        if (item.data_offset > records.size() || n > records.size() - item.data_offset) {
+          throw FormatError(where(item) + ": chunk no longer holds the message it indexed (file changed?)");
+        }
         const std::uint8_t* p = records.data() + item.data_offset;
         out.data.assign(p, p + n);
       }
