@@ -388,10 +388,10 @@ TEST_CASE("Rosbag1Writer splits chunks at chunk_bytes and reports unwritable pat
 TEST_CASE("CRC-32 is the ISO-HDLC one MCAP uses", "[io][bags]") {
   const std::string check = "123456789";
   // The standard check value of CRC-32/ISO-HDLC.
-  CHECK(io::detail::crc32(reinterpret_cast<const std::uint8_t*>(check.data()), check.size()) == 0xCBF43926U);
+  CHECK(io::detail::mcap_crc32(reinterpret_cast<const std::uint8_t*>(check.data()), check.size()) == 0xCBF43926U);
   // Continuation equals one pass.
   const auto* p = reinterpret_cast<const std::uint8_t*>(check.data());
-  CHECK(io::detail::crc32(p + 4, 5, io::detail::crc32(p, 4)) == 0xCBF43926U);
+  CHECK(io::detail::mcap_crc32(p + 4, 5, io::detail::mcap_crc32(p, 4)) == 0xCBF43926U);
 }
 
 TEST_CASE("McapWriter: magic, header, chunk, message index, summary, footer and CRCs", "[io][bags]") {
@@ -438,7 +438,7 @@ TEST_CASE("McapWriter: magic, header, chunk, message index, summary, footer and 
       records = raw;
     }
     REQUIRE(records.size() == uncompressed_size);
-    CHECK(io::detail::crc32(records.data(), records.size()) == crc);
+    CHECK(io::detail::mcap_crc32(records.data(), records.size()) == crc);
     // Inside: Schema (Imu), Channel (/imu/data), Message, Schema, Channel, Message.
     std::vector<std::pair<std::uint8_t, std::size_t>> ops;  // (opcode, offset)
     for (std::size_t p = 0; p < records.size(); p += 9 + at<std::uint64_t>(records, p + 1)) ops.emplace_back(records[p], p);
@@ -474,7 +474,7 @@ TEST_CASE("McapWriter: magic, header, chunk, message index, summary, footer and 
     const auto summary_start = at<std::uint64_t>(b, footer + 9);
     const auto summary_offset_start = at<std::uint64_t>(b, footer + 17);
     CHECK(at<std::uint32_t>(b, footer + 25) ==
-          io::detail::crc32(b.data() + summary_start, footer + 25 - static_cast<std::size_t>(summary_start)));
+          io::detail::mcap_crc32(b.data() + summary_start, footer + 25 - static_cast<std::size_t>(summary_start)));
     // DataEnd right before the summary; the summary opens with the schemas.
     CHECK(b[summary_start - 13] == 0x0F);
     CHECK(b[summary_start] == 0x03);

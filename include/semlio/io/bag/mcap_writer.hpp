@@ -50,7 +50,7 @@ namespace detail {
 
 /// CRC-32 (ISO-HDLC: reflected polynomial 0xEDB88320, as zlib and MCAP use),
 /// continued from `crc` (0 to start).
-inline std::uint32_t crc32(const std::uint8_t* data, std::size_t n, std::uint32_t crc = 0) {
+inline std::uint32_t mcap_crc32(const std::uint8_t* data, std::size_t n, std::uint32_t crc = 0) {
   static const std::array<std::uint32_t, 256> table = [] {
     std::array<std::uint32_t, 256> t{};
     for (std::uint32_t i = 0; i < 256; ++i) {
@@ -251,7 +251,7 @@ class McapWriter {
     detail::append_le(out, std::uint64_t{20});
     detail::append_le(out, summary_start);
     detail::append_le(out, summary_offset_start);
-    detail::append_le(out, detail::crc32(out.data(), out.size()));
+    detail::append_le(out, detail::mcap_crc32(out.data(), out.size()));
     out.insert(out.end(), detail::kMcapMagic.begin(), detail::kMcapMagic.end());
     file_.write(out);
     file_.close();
@@ -352,7 +352,7 @@ class McapWriter {
 
   void flush_chunk() {
     if (chunk_messages_ == 0) return;
-    const std::uint32_t crc = detail::crc32(chunk_.data(), chunk_.size());
+    const std::uint32_t crc = detail::mcap_crc32(chunk_.data(), chunk_.size());
     std::vector<std::uint8_t> packed;
     const std::vector<std::uint8_t>* records = &chunk_;
     if (config_.compression == McapCompression::kZstd) {
