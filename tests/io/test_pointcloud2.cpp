@@ -22,7 +22,7 @@ namespace {
 
 using semlio::FormatError;
 using semlio::Scan;
-using semlio::io::CloudLayout;
+using semlio::io::PointCloud2Layout;
 using semlio::io::PointCloud2Config;
 using semlio::io::PointCloud2Msg;
 using semlio::io::PointField;
@@ -107,7 +107,7 @@ void require_throws_with(F&& f, const std::string& fragment) {
 TEST_CASE("pointcloud2: Velodyne layout with padding bytes and negative relative float32 times", "[io][pointcloud2]") {
   const std::uint32_t n = 200;
   const CloudWriter w = velodyne_cloud(n);
-  CloudLayout layout;
+  PointCloud2Layout layout;
   ReadStats stats;
   const Scan s = pointcloud2_to_scan(w.msg, {}, &layout, &stats);
   REQUIRE(s.size() == n);
@@ -171,7 +171,7 @@ TEST_CASE("pointcloud2: Ouster organised cloud with row padding, uint8 ring, uin
       w.put(r, c, "ring", static_cast<std::uint8_t>(r));
     }
   }
-  CloudLayout layout;
+  PointCloud2Layout layout;
   ReadStats stats;
   const Scan s = pointcloud2_to_scan(w.msg, {}, &layout, &stats);
   s.validate();
@@ -216,7 +216,7 @@ TEST_CASE("pointcloud2: Hesai float64 absolute seconds, header stamped at the sw
     w.put(0, j, "timestamp", first + j * 1e-4);
     w.put(0, j, "ring", static_cast<std::uint16_t>(j % 32));
   }
-  CloudLayout layout;
+  PointCloud2Layout layout;
   const Scan s = pointcloud2_to_scan(w.msg, {}, &layout);
   REQUIRE(s.size() == n);
   CHECK(s.stamp_s == first);
@@ -249,7 +249,7 @@ TEST_CASE("pointcloud2: Robosense uint8 intensity, uint16 ring, float64 absolute
     w.put(0, j, "ring", static_cast<std::uint16_t>(j % 16));
     w.put(0, j, "timestamp", 1700000000.0 + (n - j) * 1e-5);  // reversed: the last point is the earliest
   }
-  CloudLayout layout;
+  PointCloud2Layout layout;
   const Scan s = pointcloud2_to_scan(w.msg, {}, &layout);
   REQUIRE(s.size() == n);
   CHECK(layout.intensity_type == kU8);
@@ -272,7 +272,7 @@ TEST_CASE("pointcloud2: Livox packed 22-byte points with uint32 offset_time and 
     w.put(0, j, "intensity", 10.0F);
     w.put(0, j, "offset_time", static_cast<std::uint32_t>(j * 100000));
   }
-  CloudLayout layout;
+  PointCloud2Layout layout;
   const Scan s = pointcloud2_to_scan(w.msg, {}, &layout);
   REQUIRE(s.size() == n);
   CHECK_FALSE(s.has_rings());
@@ -300,7 +300,7 @@ TEST_CASE("pointcloud2: livox_ros_driver2 float64 absolute nanoseconds", "[io][p
     w.put(0, j, "z", pz(j));
     w.put(0, j, "timestamp", first_ns + j * 1024.0 * 1024.0);  // steps exact at this magnitude (ulp 256 ns)
   }
-  CloudLayout layout;
+  PointCloud2Layout layout;
   const Scan s = pointcloud2_to_scan(w.msg, {}, &layout);
   CHECK(layout.time_mode == PointTimeMode::kAbsoluteNanoseconds);
   CHECK(s.stamp_s == 1700000000.0);
@@ -331,7 +331,7 @@ TEST_CASE("pointcloud2: float64 coordinates, big-endian, with int16 ring", "[io]
       w.put(r, c, "ring", static_cast<std::int16_t>(r + 10));
     }
   }
-  CloudLayout layout;
+  PointCloud2Layout layout;
   const Scan s = pointcloud2_to_scan(w.msg, {}, &layout);
   REQUIRE(s.size() == 6);
   CHECK(layout.coordinate_type == kF64);
@@ -351,7 +351,7 @@ TEST_CASE("pointcloud2: intensity falls back to reflectivity; configured lists a
     w.put(0, j, "z", pz(j));
     w.put(0, j, "reflectivity", static_cast<std::uint16_t>(1000 + j));
   }
-  CloudLayout layout;
+  PointCloud2Layout layout;
   Scan s = pointcloud2_to_scan(w.msg, {}, &layout);
   CHECK(layout.intensity_field == "reflectivity");
   CHECK(s.intensity == std::vector<float>{1000.0F, 1001.0F, 1002.0F, 1003.0F});

@@ -31,7 +31,7 @@ namespace {
 using semlio::Scan;
 using semlio::io::BagMessage;
 using semlio::io::BagTopic;
-using semlio::io::CloudLayout;
+using semlio::io::PointCloud2Layout;
 using semlio::io::ImuMsg;
 using semlio::io::PointCloud2Msg;
 using semlio::io::ReadStats;
@@ -92,7 +92,7 @@ float fx(std::size_t j) { return 1.0F + 0.25F * static_cast<float>(j); }
 std::size_t index_of(float x) { return static_cast<std::size_t>(std::lround((x - 1.0F) / 0.25F)); }
 
 /// Checks one decoded quirk cloud of `topic` against the formulas; returns its k.
-int check_quirk_cloud(const std::string& topic, const PointCloud2Msg& msg, const Scan& s, const CloudLayout& layout,
+int check_quirk_cloud(const std::string& topic, const PointCloud2Msg& msg, const Scan& s, const PointCloud2Layout& layout,
                       const ReadStats& stats) {
   INFO("topic " << topic << ", header stamp " << msg.stamp_s);
   REQUIRE(!s.empty());
@@ -240,7 +240,7 @@ TEST_CASE("rosbag1: every driver layout in the quirk bags decodes to the script'
       const BagTopic& t = reader.topics().at(m.topic);
       if (t.type != "sensor_msgs/PointCloud2") continue;
       parse_ros1_pointcloud2(m.data.data(), m.data.size(), msg);
-      CloudLayout layout;
+      PointCloud2Layout layout;
       ReadStats stats;
       const Scan s = pointcloud2_to_scan(msg, {}, &layout, &stats);
       clouds[t.name].push_back(check_quirk_cloud(t.name, msg, s, layout, stats));

@@ -75,7 +75,9 @@ struct PointCloud2Config {
 };
 
 /// What pointcloud2_to_scan() found in a cloud (datatype 0 = field absent).
-struct CloudLayout {
+/// (Not named CloudLayout: io/bag/ros_writer_msgs.hpp's enum of written
+/// layouts has that name in this namespace.)
+struct PointCloud2Layout {
   std::uint8_t coordinate_type = 0;    ///< PointFieldType of x, y, z
   std::string intensity_field;         ///< name used for Scan::intensity ("" = none)
   std::uint8_t intensity_type = 0;     ///< its PointFieldType code
@@ -300,7 +302,7 @@ inline double ns_to_stamp_s(std::int64_t ns) noexcept {
 /// `layout` (optional) receives what was found; `stats` (optional) counts the
 /// dropped points. Thread-safe for distinct outputs.
 inline void pointcloud2_to_scan(const PointCloud2Msg& msg, Scan& out, const PointCloud2Config& config = {},
-                                CloudLayout* layout = nullptr, ReadStats* stats = nullptr) {
+                                PointCloud2Layout* layout = nullptr, ReadStats* stats = nullptr) {
   using namespace detail::pc2;
   validate(msg);
   out.clear();
@@ -499,7 +501,7 @@ inline void pointcloud2_to_scan(const PointCloud2Msg& msg, Scan& out, const Poin
 
 /// Decodes `msg` into a new Scan; see the overload above.
 inline Scan pointcloud2_to_scan(const PointCloud2Msg& msg, const PointCloud2Config& config = {},
-                                CloudLayout* layout = nullptr, ReadStats* stats = nullptr) {
+                                PointCloud2Layout* layout = nullptr, ReadStats* stats = nullptr) {
   Scan scan;
   pointcloud2_to_scan(msg, scan, config, layout, stats);
   return scan;
