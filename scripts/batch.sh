@@ -79,7 +79,7 @@ jobs_file="$OUT/jobs.tsv"  # run name <TAB> input path
 : > "$jobs_file"
 i=0
 for p in "${inputs[@]}"; do
-  name=$(printf '%03d_%s' "$i" "$(basename "${p%/}" | tr -c 'A-Za-z0-9._-\n' '_')")
+  name=$(printf '%03d_%s' "$i" "$(basename "${p%/}" | tr -c 'A-Za-z0-9._\n-' '_')")
   printf '%s\t%s\n' "$name" "$p" >> "$jobs_file"
   i=$((i + 1))
 done

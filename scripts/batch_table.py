@@ -94,13 +94,14 @@ def main():
                 r = {}
                 row["status"] = f"bad report.json: {e}"
             frames = r.get("frames")
+            kitti = get(r, "evaluation", "kitti") if get(r, "evaluation", "kitti", "segments") else None
             row.update(format=get(r, "input", "format") or ("kitti" if r.get("schema", "").startswith("semlio_kitti") else None),
                        status=row["status"] or r.get("status", "complete"), preset=r.get("preset"), labels=r.get("labels"),
                        frames=len(frames) if isinstance(frames, list) else None, keyframes=r.get("keyframe_count"),
                        ate_rmse_m=get(r, "evaluation", "ate_all_frames", "rmse_m"),
                        ate_keyframes_rmse_m=get(r, "evaluation", "ate_keyframes", "rmse_m"),
-                       t_err_pct=get(r, "evaluation", "kitti", "translation_error_pct"),
-                       r_err_deg_per_100m=get(r, "evaluation", "kitti", "rotation_error_deg_per_100m"),
+                       t_err_pct=get(kitti, "translation_error_pct"),
+                       r_err_deg_per_100m=get(kitti, "rotation_error_deg_per_100m"),
                        frame_ms_median=get(r, "frame_time_ms", "median"), frame_ms_p95=get(r, "frame_time_ms", "p95"),
                        wall_s=r.get("wall_time_s"))
         else:

@@ -29,7 +29,8 @@
 #                        semlio_kitti finds it); KITTI_FRAMES=N caps its length.
 # Environment: BUILD_DIR (build), OUT (results/reproduce[_quick]), SKIP_BUILD=1
 # (use BUILD_DIR as built, install nothing), SEED (1), LONG_FRAMES (1000: the
-# long simulated drive of the full run).
+# long simulated drive of the full run), DATASETS (shell patterns: run only the
+# datasets whose names match, e.g. 'sim_urban_heavy sim_rural kitti*').
 #
 # Each dataset runs semlio_kitti six times (configurations below, all with
 # the same settings otherwise) one after the other; accuracy is
@@ -74,6 +75,9 @@ fi
 rm -rf "$OUT"
 mkdir -p "$OUT/data" "$OUT/runs" "$OUT/configs"
 start=$(date +%s)
+# The machine's load, for reading the frame times (load.txt: start and end).
+load_now() { echo "$(cut -d' ' -f1-3 /proc/loadavg 2> /dev/null) on $(nproc) cores"; }
+echo "start: $(load_now)" > "$OUT/load.txt"
 
 # --- the six configurations of Table 3 --------------------------------------
 # semlio_kitti has two presets; the parts of `full` are switched off through
@@ -105,7 +109,19 @@ CONFIGS=("baseline baseline semantic" "full full semantic" "nc_only full none"
 # YAML (deskew for raw sweeps; "-" none), reference
 DS="$OUT/datasets.tsv"
 : > "$DS"
+# DATASETS="PATTERN ...": run only the datasets whose names match one of the
+# shell patterns (e.g. DATASETS='sim_urban_heavy kitti*'); default: all.
+wanted() {
+  [[ -z "${DATASETS:-}" ]] && return 0
+  local p
+  for p in $DATASETS; do
+    # shellcheck disable=SC2053  # a pattern on purpose
+    [[ "$1" == $p ]] && return 0
+  done
+  return 1
+}
 simulate() {  # name world traffic frames
+  wanted "$1" || return 0
   echo "== simulating $1: $2, $3 traffic, $4 frames, seed $SEED"
   "$BIN/semlio_simulate" --world "$2" --traffic "$3" --frames "$4" --seed "$SEED" --threads 2 \
     --out "$OUT/data/$1" > /dev/null
@@ -113,6 +129,7 @@ simulate() {  # name world traffic frames
     "simulator (exact)" >> "$DS"
 }
 pcd_folder() {  # name dir: a folder of PCD scans -> a KITTI layout (no ground truth)
+  wanted "$1" || return 0
   mkdir -p "$OUT/data/$1/velodyne"
   local i=0 f
   for f in "$2"/*.pcd; do
@@ -134,7 +151,7 @@ else
   simulate sim_rural rural light 300
   simulate sim_highway highway light 300
 fi
-printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' kitti00_2 tests/data/kitti/sequences/00 real "KITTI 00 (first 2 scans), urban" \
+wanted kitti00_2 && printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' kitti00_2 tests/data/kitti/sequences/00 real "KITTI 00 (first 2 scans), urban" \
   geometric - "KITTI ground truth" >> "$DS"
 pcd_folder kitti_raw_3 tests/data/kitti_raw/snippet_22
 if [[ $QUICK == 0 ]]; then
@@ -144,12 +161,14 @@ if [[ $QUICK == 0 ]]; then
     date_part=$(basename "$drive" | cut -c1-10)
     calib=${KITTI_RAW_CALIB:-$(dirname "$drive")/calib_$date_part}
     name=kitti_raw_$(basename "$drive" | sed -n 's/.*drive_\([0-9]*\).*/\1/p')
+  fi
+  if [[ -n "${KITTI_RAW_DRIVE:-}" ]] && wanted "$name"; then
     /usr/bin/python3 scripts/kitti_raw_drive.py "$drive" "$calib" "$OUT/data/$name"
     printf 'deskew: {mode: constant_velocity, point_times: azimuth}\n' > "$OUT/configs/$name.extra.yaml"
-    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$OUT/data/$name" real "KITTI raw $(basename "$drive"), residential" \
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$OUT/data/$name" real "KITTI raw $(basename "$drive")" \
       geometric "$OUT/configs/$name.extra.yaml" "OXTS GNSS/INS (~0.5 m)" >> "$DS"
   fi
-  if [[ -n "${KITTI_ROOT:-}" ]]; then
+  if [[ -n "${KITTI_ROOT:-}" ]] && wanted "kitti_$(basename "${KITTI_ROOT%/}")"; then
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "kitti_$(basename "${KITTI_ROOT%/}")" "${KITTI_ROOT%/}" real \
       "KITTI odometry $(basename "${KITTI_ROOT%/}")" geometric - "KITTI ground truth" >> "$DS"
   fi
@@ -183,6 +202,7 @@ if [[ $QUICK == 1 ]]; then miou_frames=1; else miou_frames=5; fi
 SKIP_BUILD=1 BUILD_DIR="$BUILD_DIR" scripts/segmenter_miou.sh "$miou_frames" "$SEED" > "$OUT/segmenter_iou.md"
 
 # --- the page ----------------------------------------------------------------
+echo "end: $(load_now)" >> "$OUT/load.txt"
 mode=full
 [[ $QUICK == 1 ]] && mode=quick
 args=("$OUT" --mode "$mode" --seconds $(( $(date +%s) - start )))

@@ -399,7 +399,14 @@ def page(datasets, run_dir, mode, made, seconds):
               "reading and processing the frame (`cpu_ms`) and wall time per stage (`timings_ms`) from "
               "`report.json`, measured while the script ran (one process at a time; the machine was shared, "
               "so wall times are upper bounds). `scripts/frame_time.sh` measures the same one core at a time "
-              "with `bench_frame_time`.", ""] + frame_time_table(datasets)
+              "with `bench_frame_time`.", ""]
+        load = os.path.join(run_dir, "load.txt")
+        if os.path.exists(load):
+            L += ["Load average (1, 5, 15 min) of the machine while the script ran: " +
+                  "; ".join(x.strip() for x in open(load) if x.strip()) + ". With a load above the core count, "
+                  "a process waits for a core inside its stages, and the wall times per stage below measure that "
+                  "wait as much as the work; the CPU column does not include the wait.", ""]
+        L += frame_time_table(datasets)
     iou = os.path.join(run_dir, "segmenter_iou.md")
     if os.path.exists(iou):
         L += ["", "## Segmenter IoU (GeometricSegmenter vs the simulator's exact labels)", ""]
