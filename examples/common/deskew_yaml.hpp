@@ -15,6 +15,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <numbers>
 #include <string>
 
@@ -34,12 +35,12 @@ inline std::string text(const YAML::Node& n, const std::string& key, const std::
 }
 
 inline double number(const YAML::Node& n, const std::string& key, const std::string& path) {
-  try {
-    return n.as<double>();
-  } catch (const YAML::Exception&) {
-    throw semlio::ConfigError(path + ": 'deskew." + key + "' must be a number, got '" +
+  double v = 0.0;
+  if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !std::isfinite(v)) {
+    throw semlio::ConfigError(path + ": 'deskew." + key + "' must be a finite number, got '" +
                               (n.IsScalar() ? n.Scalar() : std::string("(not a scalar)")) + "'");
   }
+  return v;
 }
 
 inline bool boolean(const YAML::Node& n, const std::string& key, const std::string& path) {
@@ -66,19 +67,26 @@ inline void load_deskew_yaml(const YAML::Node& section, semlio::SweepDeskewConfi
   if (!section || section.IsNull()) return;
   if (!section.IsMap()) throw semlio::ConfigError(path + ": section 'deskew' must be a map");
   for (const auto& kv : section) {
-    const auto key = kv.first.as<std::string>();
+    if (!kv.first.IsDefined() || !kv.first.IsScalar()) {
+      const long line = kv.first.Mark().line >= 0 ? kv.first.Mark().line + 1L : 0L;
+      throw semlio::ConfigError(semlio::detail::where(path, line, "a key in section 'deskew' is null or not a scalar, expected a name"));
+    }
+    const std::string key = kv.first.Scalar();
     const YAML::Node& v = kv.second;
+    // "file:line" of the value: every message below names the line too.
+    const long line = v.Mark().line >= 0 ? v.Mark().line + 1L : kv.first.Mark().line + 1L;
+    const std::string at = line > 0 ? path + ":" + std::to_string(line) : path;
     if (key == "mode") {
-      const std::string s = d::text(v, key, path);
+      const std::string s = d::text(v, key, at);
       if (s == "none") {
         c.mode = semlio::DeskewMode::kNone;
       } else if (s == "constant_velocity") {
         c.mode = semlio::DeskewMode::kConstantVelocity;
       } else {
-        d::bad_choice(key, s, "none, constant_velocity", path);
+        d::bad_choice(key, s, "none, constant_velocity", at);
       }
     } else if (key == "point_times") {
-      const std::string s = d::text(v, key, path);
+      const std::string s = d::text(v, key, at);
       if (s == "auto") {
         c.point_times = semlio::PointTimeSource::kAuto;
       } else if (s == "scan") {
@@ -86,25 +94,25 @@ inline void load_deskew_yaml(const YAML::Node& section, semlio::SweepDeskewConfi
       } else if (s == "azimuth") {
         c.point_times = semlio::PointTimeSource::kAzimuth;
       } else {
-        d::bad_choice(key, s, "auto, scan, azimuth", path);
+        d::bad_choice(key, s, "auto, scan, azimuth", at);
       }
     } else if (key == "sweep_period_s") {
-      c.sweep_period_s = d::number(v, key, path);
+      c.sweep_period_s = d::number(v, key, at);
     } else if (key == "start_azimuth_deg") {
-      c.start_azimuth_rad = d::number(v, key, path) * std::numbers::pi / 180.0;
+      c.start_azimuth_rad = d::number(v, key, at) * std::numbers::pi / 180.0;
     } else if (key == "direction") {
-      const std::string s = d::text(v, key, path);
+      const std::string s = d::text(v, key, at);
       if (s == "clockwise") {
         c.clockwise = true;
       } else if (s == "counter_clockwise") {
         c.clockwise = false;
       } else {
-        d::bad_choice(key, s, "clockwise, counter_clockwise", path);
+        d::bad_choice(key, s, "clockwise, counter_clockwise", at);
       }
     } else if (key == "reverse_time") {
-      c.reverse_time = d::boolean(v, key, path);
+      c.reverse_time = d::boolean(v, key, at);
     } else if (key == "target") {
-      const std::string s = d::text(v, key, path);
+      const std::string s = d::text(v, key, at);
       if (s == "start") {
         c.target = semlio::DeskewTarget::kStart;
       } else if (s == "middle") {
@@ -112,12 +120,12 @@ inline void load_deskew_yaml(const YAML::Node& section, semlio::SweepDeskewConfi
       } else if (s == "end") {
         c.target = semlio::DeskewTarget::kEnd;
       } else {
-        d::bad_choice(key, s, "start, middle, end", path);
+        d::bad_choice(key, s, "start, middle, end", at);
       }
     } else if (key == "frame_period_s") {
-      c.frame_period_s = d::number(v, key, path);
+      c.frame_period_s = d::number(v, key, at);
     } else {
-      throw semlio::ConfigError(path + ": unknown key 'deskew." + key + "'");
+      throw semlio::ConfigError(at + ": unknown key 'deskew." + key + "'");
     }
   }
   try {

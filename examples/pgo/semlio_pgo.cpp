@@ -7,12 +7,15 @@
 // fixed unless the file has FIX lines), iterations, the number of repaired
 // information matrices and the solve time. The default error convention is
 // the one of the reference values (graph/between_error.hpp).
+#include <charconv>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
 #include <exception>
+#include <stdexcept>
 #include <string>
+#include <system_error>
 
 #include <semlio/graph/pose_graph.hpp>
 #include <semlio/io/g2o.hpp>
@@ -50,6 +53,17 @@ int run(Graph graph, semlio::io::G2oGraph& file, const std::string& out_path) {
   return report.ok() ? 0 : 1;
 }
 
+/// --max-iterations N: a whole number in [1, 1000000]; anything else is an
+/// error naming the option and the value (std::stoi said only "stoi").
+int parse_iterations(const std::string& text) {
+  int v = 0;
+  const auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (text.empty() || ec != std::errc() || ptr != text.data() + text.size() || v < 1 || v > 1000000) {
+    throw std::invalid_argument("--max-iterations needs a whole number in [1, 1000000], got '" + text + "'");
+  }
+  return v;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -67,7 +81,7 @@ int main(int argc, char** argv) {
       if (a == "--out") {
         out_path = value();
       } else if (a == "--max-iterations") {
-        config.max_iterations = std::stoi(value());
+        config.max_iterations = parse_iterations(value());
       } else if (a == "--strict") {
         read_config.strict = true;
       } else if (a == "--rotation") {
@@ -105,9 +119,23 @@ int main(int argc, char** argv) {
     const auto t0 = std::chrono::steady_clock::now();
     semlio::io::G2oGraph file = semlio::io::read_g2o(in_path, read_config);
     const double read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("file: %s (%dD, %zu vertices, %zu edges, read %.3f s)\n", in_path.c_str(), file.dimension,
-                file.dimension == 2 ? file.vertices2.size() : file.vertices3.size(),
-                file.dimension == 2 ? file.edges2.size() : file.edges3.size(), read_s);
+    const std::size_t vertices = file.dimension == 2 ? file.vertices2.size() : file.vertices3.size();
+    const std::size_t edges = file.dimension == 2 ? file.edges2.size() : file.edges3.size();
+    if (file.skipped_lines > 0) {
+      std::fprintf(stderr, "semlio_pgo: %s: skipped %zu line(s) with unknown tags (first on line %ld)\n",
+                   in_path.c_str(), file.skipped_lines, file.first_skipped_line);
+    }
+    // A file in another format (or an empty one) has no vertex or no edge:
+    // "optimising" it would report nothing_to_solve and exit 0.
+    if (vertices == 0 || edges == 0) {
+      std::fprintf(stderr,
+                   "semlio_pgo: %s: not a g2o pose graph: %zu vertices, %zu edges, %zu line(s) with unknown tags "
+                   "(expected VERTEX_SE3:QUAT/EDGE_SE3:QUAT or VERTEX_SE2/EDGE_SE2 lines)\n",
+                   in_path.c_str(), vertices, edges, file.skipped_lines);
+      return 1;
+    }
+    std::printf("file: %s (%dD, %zu vertices, %zu edges, %zu skipped lines, read %.3f s)\n", in_path.c_str(),
+                file.dimension, vertices, edges, file.skipped_lines, read_s);
     if (file.dimension == 2) return run(semlio::io::make_pose_graph2(file, config), file, out_path);
     return run(semlio::io::make_pose_graph3(file, config), file, out_path);
   } catch (const std::exception& e) {

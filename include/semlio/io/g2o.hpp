@@ -152,7 +152,7 @@ struct G2oLine {
   }
   [[nodiscard]] double finite(std::size_t k) const {
     const double v = number(k);
-    if (!std::isfinite(v)) fail("field " + std::to_string(k) + ": non-finite value " + std::string(tok[k]));
+    if (!std::isfinite(v)) fail("field " + std::to_string(k) + ": non-finite value '" + std::string(tok[k]) + "'");
     return v;
   }
   [[nodiscard]] Eigen::Quaterniond quaternion(std::size_t k) const {

@@ -30,7 +30,8 @@ inline SE3d pose_from_3x4(const double* v, const std::string& path, long line, c
   for (std::size_t i = 0; i < 12; ++i) {
     if (!std::isfinite(v[i])) {
       throw ValueError(detail::where(
-          path, line, what + " field " + std::to_string(i + 1) + " is not finite (" + std::to_string(v[i]) + ")"));
+          path, line,
+          what + " field " + std::to_string(i + 1) + " is not finite (" + (std::isnan(v[i]) ? "NaN" : "infinite") + ")"));
     }
   }
   Eigen::Matrix3d R;
