@@ -21,9 +21,11 @@ const std::string& bag_path() {
 }
 
 /// The whole path per scan: next() (chunk read + LZ4 decompression + copy),
-/// ROS 1 deserialisation, PointCloud2 -> Scan. The reader restarts with
-/// select(), and its two-chunk cache never holds the next scan's chunk (three
-/// chunks in turn), so every scan is decompressed.
+/// ROS 1 deserialisation, PointCloud2 -> Scan (arg 0: through a
+/// PointCloud2Msg, as MCAP/CDR readers do; arg 1: ros1_pointcloud2_to_scan,
+/// straight from the message bytes). The reader restarts with select(), and
+/// its two-chunk cache never holds the next scan's chunk (three chunks in
+/// turn), so every scan is decompressed.
 void BM_Ros1BagReadDecode(benchmark::State& state) {
   semlio::io::RosBag1Reader reader(bag_path());
   semlio::io::BagMessage msg;
@@ -31,11 +33,16 @@ void BM_Ros1BagReadDecode(benchmark::State& state) {
   semlio::Scan scan;
   std::size_t points = 0;
   std::int64_t scans = 0;
+  const bool direct = state.range(0) != 0;
   for (auto _ : state) {
     reader.select({"/kitti/velo/pointcloud"});
     while (reader.next(msg)) {
-      semlio::io::parse_ros1_pointcloud2(msg.data.data(), msg.data.size(), cloud);
-      semlio::io::pointcloud2_to_scan(cloud, scan);
+      if (direct) {
+        semlio::io::ros1_pointcloud2_to_scan(msg.data.data(), msg.data.size(), scan);
+      } else {
+        semlio::io::parse_ros1_pointcloud2(msg.data.data(), msg.data.size(), cloud);
+        semlio::io::pointcloud2_to_scan(cloud, scan);
+      }
       points += scan.size();
       ++scans;
     }
@@ -44,7 +51,7 @@ void BM_Ros1BagReadDecode(benchmark::State& state) {
   state.SetItemsProcessed(scans);  // items/s = scans/s
   state.counters["points_per_scan"] = benchmark::Counter(static_cast<double>(points) / static_cast<double>(scans));
 }
-BENCHMARK(BM_Ros1BagReadDecode)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Ros1BagReadDecode)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 /// next() alone: chunk read + LZ4 decompression + copy of the message bytes.
 void BM_Ros1BagNext(benchmark::State& state) {

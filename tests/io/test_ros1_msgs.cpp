@@ -113,6 +113,25 @@ TEST_CASE("ros1 msgs: PointCloud2 fields, layout and data", "[io][ros1_msgs]") {
   CHECK(s.rings == std::vector<std::uint16_t>{7, 8});
 }
 
+TEST_CASE("ros1 msgs: decoding straight from the message bytes equals deserialise-then-decode", "[io][ros1_msgs]") {
+  const std::vector<std::uint8_t> bytes = cloud_bytes();
+  const semlio::Scan two_steps = semlio::io::pointcloud2_to_scan(parse_ros1_pointcloud2(bytes));
+  semlio::Scan direct;
+  PointCloud2Msg header;
+  semlio::io::PointCloud2Layout layout;
+  semlio::io::ros1_pointcloud2_to_scan(bytes.data(), bytes.size(), direct, {}, &layout, nullptr, &header);
+  CHECK(direct.points == two_steps.points);
+  CHECK(direct.rings == two_steps.rings);
+  CHECK(direct.stamp_s == two_steps.stamp_s);
+  CHECK(header.frame_id == "velo_link");
+  CHECK(header.data.empty());
+  CHECK(layout.ring_field == "ring");
+  for (std::size_t n = 0; n < bytes.size(); ++n) {
+    INFO("truncated to " << n << " bytes");
+    CHECK_THROWS_AS(semlio::io::ros1_pointcloud2_to_scan(bytes.data(), n, direct), FormatError);
+  }
+}
+
 TEST_CASE("ros1 msgs: Imu quaternion order, vectors and covariances", "[io][ros1_msgs]") {
   const ImuMsg m = parse_ros1_imu(imu_bytes());
   CHECK(m.stamp_s == 1317357624.0 + 999999999.0 / 1e9);

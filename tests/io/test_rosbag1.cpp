@@ -185,6 +185,10 @@ TEST_CASE("rosbag1: the KITTI lz4 bag holds the three PCD scans bit-exactly and 
     CHECK(stats.dropped_zero == 1);  // each KITTI raw scan holds one (0,0,0) point (kitti_raw/README.md)
     CHECK(stats.dropped() == pcd_stats.dropped());
     CHECK(s.stamp_s == cloud.stamp_s);  // no per-point time in KITTI: the header stamp
+    Scan direct;  // decoded from the message bytes without the PointCloud2Msg copy
+    semlio::io::ros1_pointcloud2_to_scan(m.data.data(), m.data.size(), direct);
+    CHECK(direct.points == s.points);
+    CHECK(direct.intensity == s.intensity);
   }
   CHECK_FALSE(reader.next(m));
 

@@ -18,6 +18,9 @@
 #include <vector>
 
 #include <semlio/core/error.hpp>
+#include <semlio/core/scan.hpp>
+#include <semlio/io/pointcloud2.hpp>
+#include <semlio/io/read_stats.hpp>
 #include <semlio/io/ros_msgs.hpp>
 
 namespace semlio::io {
@@ -61,11 +64,11 @@ class Cursor {
     pos_ += n;
     return s;
   }
-  /// A uint8[] into `out` (reusing its capacity).
-  void bytes(std::vector<std::uint8_t>& out, const char* field) {
-    const std::uint32_t n = u32(field);
+  /// Skips a uint8[], returning where its bytes lie (offset into the message, count).
+  void skip_bytes(std::size_t& offset, std::size_t& n, const char* field) {
+    n = u32(field);
     need(n, field);
-    out.assign(data_ + pos_, data_ + pos_ + n);
+    offset = pos_;
     pos_ += n;
   }
   /// Throws FormatError when bytes remain after the last field.
@@ -105,11 +108,12 @@ inline void header(Cursor& in, double& stamp_s, std::string& frame_id) {
 
 }  // namespace detail::ros1
 
-/// Deserialises a ROS 1 sensor_msgs/PointCloud2 into `out` (reusing its
-/// buffers). Throws FormatError on truncated, lying or trailing bytes. The
-/// point layout itself is checked by pointcloud2_to_scan().
-inline void parse_ros1_pointcloud2(const std::uint8_t* data, std::size_t size, PointCloud2Msg& out) {
-  detail::ros1::Cursor in(data, size, "sensor_msgs/PointCloud2");
+namespace detail::ros1 {
+
+/// Every PointCloud2 field but `data`, whose place in the message is returned.
+inline void pointcloud2_fields(const std::uint8_t* data, std::size_t size, PointCloud2Msg& out,
+                               std::size_t& data_offset, std::size_t& data_size) {
+  Cursor in(data, size, "sensor_msgs/PointCloud2");
   detail::ros1::header(in, out.stamp_s, out.frame_id);
   out.height = in.u32("height");
   out.width = in.u32("width");
@@ -130,9 +134,21 @@ inline void parse_ros1_pointcloud2(const std::uint8_t* data, std::size_t size, P
   out.is_bigendian = in.u8("is_bigendian") != 0;
   out.point_step = in.u32("point_step");
   out.row_step = in.u32("row_step");
-  in.bytes(out.data, "data");
+  in.skip_bytes(data_offset, data_size, "data");
   out.is_dense = in.u8("is_dense") != 0;
   in.finish();
+}
+
+}  // namespace detail::ros1
+
+/// Deserialises a ROS 1 sensor_msgs/PointCloud2 into `out` (reusing its
+/// buffers). Throws FormatError on truncated, lying or trailing bytes. The
+/// point layout itself is checked by pointcloud2_to_scan().
+inline void parse_ros1_pointcloud2(const std::uint8_t* data, std::size_t size, PointCloud2Msg& out) {
+  std::size_t offset = 0;
+  std::size_t n = 0;
+  detail::ros1::pointcloud2_fields(data, size, out, offset, n);
+  out.data.assign(data + offset, data + offset + n);
 }
 
 /// Deserialises a ROS 1 sensor_msgs/PointCloud2 (see the overload above).
@@ -140,6 +156,22 @@ inline PointCloud2Msg parse_ros1_pointcloud2(const std::vector<std::uint8_t>& by
   PointCloud2Msg msg;
   parse_ros1_pointcloud2(bytes.data(), bytes.size(), msg);
   return msg;
+}
+
+/// Deserialises a ROS 1 sensor_msgs/PointCloud2 and decodes it into `out`
+/// without copying its points into a PointCloud2Msg (see
+/// pointcloud2_data_to_scan()); `header` receives every other field (its
+/// `data` is left empty). Throws FormatError like the two steps it replaces.
+inline void ros1_pointcloud2_to_scan(const std::uint8_t* data, std::size_t size, Scan& out,
+                                     const PointCloud2Config& config = {}, PointCloud2Layout* layout = nullptr,
+                                     ReadStats* stats = nullptr, PointCloud2Msg* header = nullptr) {
+  PointCloud2Msg local;
+  PointCloud2Msg& msg = header != nullptr ? *header : local;
+  std::size_t offset = 0;
+  std::size_t n = 0;
+  detail::ros1::pointcloud2_fields(data, size, msg, offset, n);
+  msg.data.clear();
+  pointcloud2_data_to_scan(msg, data + offset, n, out, config, layout, stats);
 }
 
 /// Deserialises a ROS 1 sensor_msgs/Imu into `out`. Throws FormatError on
