@@ -38,6 +38,9 @@ add_test(NAME semlio_kitti_bad_scans
                  -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/run_bad_scans_check.cmake")
 set_tests_properties(semlio_kitti_bad_scans PROPERTIES LABELS examples TIMEOUT 300)
 
+# The bad-input catalogue of the command-line tools (tests/examples/bad_inputs.tsv).
+include("${CMAKE_CURRENT_SOURCE_DIR}/examples/bad_inputs.cmake")
+
 # Short versions of the speed and must-hold scripts the issues name. Each run
 # must complete and print its table; REPORT_ONLY=1 where a short run cannot
 # decide the must-hold (the README's numbers come from the long runs).

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# Fuzzes every reader harness of tests/fuzz/ with libFuzzer (clang,
+# -fsanitize=fuzzer,address,undefined), one harness at a time, and prints the
+# executions and findings per reader. Crash inputs are saved into
+# tests/fuzz/crashes/<reader>/, where the regular test build replays them
+# (tests/fuzz/replay.cmake) -- commit them with the fix.
+#
+# Usage: scripts/fuzz.sh [SECONDS_PER_HARNESS] [HARNESS ...]
+#   SECONDS_PER_HARNESS  -max_total_time of each run (default 60)
+#   HARNESS              a subset (default: all): kitti_bin kitti_label
+#                        kitti_calib kitti_times kitti_poses tum pcd ply oxts
+#                        g2o settings_yaml
+# Environment: SEMLIO_FUZZ_BUILD_DIR (default ${TMPDIR:-/tmp}/semlio_build_fuzz),
+#              JOBS (build parallelism, default 1), SKIP_BUILD=1 (use the
+#              executable already built there, or FUZZ_BIN when set).
+# Exit status: 0 when no harness found anything, 1 otherwise.
+set -euo pipefail
+
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+seconds=${1:-60}
+shift || true
+all=(kitti_bin kitti_label kitti_calib kitti_times kitti_poses tum pcd ply oxts g2o settings_yaml)
+harnesses=("$@")
+[ ${#harnesses[@]} -eq 0 ] && harnesses=("${all[@]}")
+build=${SEMLIO_FUZZ_BUILD_DIR:-${TMPDIR:-/tmp}/semlio_build_fuzz}
+jobs=${JOBS:-1}
+
+if [ "${SKIP_BUILD:-0}" != 1 ]; then
+  # clang 14 and its sanitizer/libFuzzer runtimes (Debian 12).
+  "$root/scripts/install_deps.sh" clang-14 libclang-rt-14-dev
+  mkdir -p "$build"
+  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+    -DSEMLIO_FUZZ=ON -DSEMLIO_WITH_BAGS=OFF -DSEMLIO_BUILD_BENCHMARKS=OFF \
+    -DSEMLIO_AREA_TESTS=OFF -DSEMLIO_WARNINGS_AS_ERRORS=OFF >"$build/configure.log" 2>&1 ||
+    { cat "$build/configure.log"; exit 2; }
+  # One executable holds every harness; SEMLIO_FUZZ_HARNESS selects one per run.
+  cmake --build "$build" -j "$jobs" --target semlio_fuzz
+fi
+bin=${FUZZ_BIN:-$build/tests/semlio_fuzz}
+
+found=0
+summary=()
+for h in "${harnesses[@]}"; do
+  seeds="$root/tests/fuzz/corpus/$h"
+  crashes="$root/tests/fuzz/crashes/$h"
+  work="$build/corpus/$h"  # new inputs go here, not into the committed seeds
+  mkdir -p "$work" "$crashes"
+  before=$(find "$crashes" -type f | wc -l)
+  log="$build/fuzz_$h.log"
+  echo "== $h: ${seconds} s"
+  set +e
+  SEMLIO_FUZZ_HARNESS=$h ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    "$bin" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+    -max_len=65536 -print_final_stats=1 -artifact_prefix="$crashes/" "$work" "$seeds" >"$log" 2>&1
+  rc=$?
+  set -e
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
+  rate=$(grep -o 'exec/s: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1)
+  after=$(find "$crashes" -type f | wc -l)
+  new=$((after - before))
+  if [ "$rc" -ne 0 ] || [ "$new" -gt 0 ]; then
+    found=1
+    echo "   FINDING (exit $rc, $new new file(s) in tests/fuzz/crashes/$h); log: $log"
+    grep -m3 -E 'ERROR: |runtime error|SUMMARY' "$log" | sed 's/^/   /' || true
+  fi
+  summary+=("$(printf '%-14s %12s execs %8s exec/s %4s findings' "$h" "${execs:-?}" "${rate:-?}" "$new")")
+done
+echo
+echo "fuzz.sh: ${seconds} s per harness"
+printf '%s\n' "${summary[@]}"
+exit "$found"
