@@ -170,7 +170,7 @@ class BagSource final : public FrameSource {
   }
 
   /// The first cloud's field layout, for the sensor decision (ring field present?).
-  [[nodiscard]] const semlio::io::CloudLayout& layout() const noexcept { return layout_; }
+  [[nodiscard]] const semlio::io::PointCloud2Layout& layout() const noexcept { return layout_; }
 
  private:
   void decode_cloud(const semlio::io::BagMessage& m, semlio::io::PointCloud2Msg& out) const {
@@ -232,7 +232,7 @@ class BagSource final : public FrameSource {
   std::optional<std::size_t> imu_;
   semlio::io::BagMessage message_;
   semlio::io::PointCloud2Msg cloud_;
-  semlio::io::CloudLayout layout_;
+  semlio::io::PointCloud2Layout layout_;
   semlio::io::PointCloud2Config cloud_config_;
   semlio::Scan first_scan_;
 };

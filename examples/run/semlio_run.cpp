@@ -38,21 +38,37 @@ void decide_sensor(const std::string& sensor, const std::string& platform, semli
   if (is_yaml_file(sensor)) {
     y = semlio_examples::load_sensor_yaml(sensor);
   } else if (sensor == "auto") {
-    if (source.kitti_scans()) {
-      ctx.sensor_facts = {{"profile", "hdl64e"}, {"decided_by", "auto: KITTI HDL-64E scans, rings from point order"}};
+    // KITTI's HDL-64E .bin scans keep the rings of their point order (and
+    // KITTI's vertical correction) when the detection confirms 64 rings in
+    // that order; any other data -- KITTI-layout folders of other sensors
+    // included -- gets the detected table.
+    const std::vector<semlio::Scan> scans = source.first_scans(3);
+    if (scans.empty()) throw semlio::FormatError(source.facts().path + ": no readable scan to detect the beams from");
+    const semlio::BeamDetection d = semlio::detect_beams(scans);
+    if (source.kitti_scans() && d.source == semlio::BeamSource::kPointOrder && d.beams() == 64) {
+      ctx.sensor_facts = {{"profile", "hdl64e"},
+                          {"decided_by", "auto: KITTI HDL-64E scans, rings from point order"},
+                          {"detection", d.note}};
       if (!platform.empty() && platform != "vehicle") {
         ctx.settings = semlio::settings_for_sensor(semlio::sensor_profile("hdl64e"), semlio::motion_profile(platform),
                                                    ctx.settings);
       }
       return;
     }
+    ctx.settings.odometry.kitti_vertical_correction = false;
     y.detect = true;
+    if (!platform.empty()) y.motion = semlio::motion_profile(platform);
+    const semlio::SensorProfile profile = semlio_examples::resolve_sensor(y, &d);
+    ctx.settings = semlio::settings_for_sensor(profile, y.motion, ctx.settings);
+    ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, &d);
+    ctx.sensor_facts.emplace_back("decided_by", "auto: beams detected from the first scans");
+    return;
   } else {
     y.sensor = semlio::sensor_profile(sensor);
   }
   if (!platform.empty()) y.motion = semlio::motion_profile(platform);
   std::optional<semlio::BeamDetection> detection;
-  if (y.detect) {
+  if (y.detect) {  // a sensor YAML with profile: auto
     const std::vector<semlio::Scan> scans = source.first_scans(3);
     if (scans.empty()) throw semlio::FormatError(source.facts().path + ": no readable scan to detect the beams from");
     detection = semlio::detect_beams(scans);
@@ -62,9 +78,7 @@ void decide_sensor(const std::string& sensor, const std::string& platform, semli
   ctx.settings = semlio::settings_for_sensor(profile, y.motion, ctx.settings);
   ctx.settings.odometry.kitti_vertical_correction = kitti_correction;
   ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, detection ? &*detection : nullptr);
-  ctx.sensor_facts.emplace_back("decided_by", is_yaml_file(sensor) ? "--sensor " + sensor
-                                              : sensor == "auto"   ? std::string("auto: beams detected from the first scans")
-                                                                   : "--sensor " + sensor);
+  ctx.sensor_facts.emplace_back("decided_by", "--sensor " + sensor);
   if (y.T_imu_lidar) ctx.T_imu_lidar = y.T_imu_lidar;
   y.apply_imu(ctx.lc.imu);
 }
@@ -135,7 +149,7 @@ int main(int argc, char** argv) {
                                 "libzstd-dev libsqlite3-dev and reconfigure)");
 #endif
     }
-    source->add_fact_front("format", why);
+    source->add_fact_front("format_decided_by", why);
     return source;
   }, [&](semlio_examples::FrameSource& source, semlio_examples::RunContext& ctx) {
     decide_sensor(in.sensor, in.platform, source, ctx);

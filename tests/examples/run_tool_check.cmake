@@ -10,6 +10,7 @@
 #  7. the KITTI raw drive as published runs and is evaluated against OXTS;
 #  8. a bag with several PointCloud2 topics names them.
 # Variables: SEMLIO_RUN, SEMLIO_CONVERT (binaries), DATA_DIR (tests/data), WORK_DIR.
+cmake_minimum_required(VERSION 3.21)  # policies: quoted strings in if() are never variables
 file(REMOVE_RECURSE "${WORK_DIR}")
 file(MAKE_DIRECTORY "${WORK_DIR}")
 set(common --labels none --preset full --sensor hdl64e --kitti-correction on --map off --quiet)
