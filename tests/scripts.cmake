@@ -73,3 +73,13 @@ semlio_add_script_test(long_run ${CMAKE_COMMAND} -E env REPORT_ONLY=1 FRAMES=60 
 if(SEMLIO_HAVE_BAGS)
   semlio_add_script_test(check_sim_bags ${SEMLIO_BASH} scripts/check_sim_bags.sh 3)
 endif()
+
+# semlio_run on every input format (bag, MCAP, KITTI folder, PCD folder, KITTI
+# raw drive), output guarding, SIGINT, missing frames, topic choice.
+if(SEMLIO_HAVE_BAGS)
+  add_test(NAME semlio_run_inputs
+           COMMAND ${CMAKE_COMMAND} "-DSEMLIO_RUN=$<TARGET_FILE:semlio_run>" "-DSEMLIO_CONVERT=$<TARGET_FILE:semlio_convert>"
+                   "-DDATA_DIR=${CMAKE_CURRENT_SOURCE_DIR}/data" "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/run_tool_check"
+                   -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/run_tool_check.cmake")
+  set_tests_properties(semlio_run_inputs PROPERTIES LABELS examples TIMEOUT 600)
+endif()
