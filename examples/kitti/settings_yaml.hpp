@@ -186,6 +186,9 @@ inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings
   using detail::set;
   constexpr double kPi = std::numbers::pi;
   constexpr double kBig = 1e12;  // counts and scales: any sane value, never negative
+  // nearest.k and normal.keep: the YAML domain is [1, kMaxCandidates]; the
+  // associators' own checks narrow it to [1, kMaxKeptMatches] (a ConfigError
+  // naming the field when the pipeline is built).
   auto& o = s.odometry;
   const std::map<std::string, detail::Setters> sections = {
       {"odometry",
@@ -226,10 +229,10 @@ inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings
         {"remap_degenerate", set(o.solver.remap_degenerate)},
         {"damp_degenerate", set(o.solver.damp_degenerate)},
         {"min_residuals", num(o.solver.min_residuals, 0.0, kBig)}}},
-      {"nearest", {{"k", num(s.nearest.k, 1.0, semlio::kMaxKeptMatches)}, {"max_distance_m", pos(s.nearest.max_distance_m, 1e4)}}},
+      {"nearest", {{"k", num(s.nearest.k, 1.0, semlio::kMaxCandidates)}, {"max_distance_m", pos(s.nearest.max_distance_m, 1e4)}}},
       {"normal",
        {{"candidates", num(s.normal.candidates, 1.0, semlio::kMaxCandidates)},
-        {"keep", num(s.normal.keep, 1.0, semlio::kMaxKeptMatches)},
+        {"keep", num(s.normal.keep, 1.0, semlio::kMaxCandidates)},
         {"scan_neighbours", num(s.normal.scan_neighbours, 0.0, 1000.0)},
         {"max_angle_rad", num(s.normal.max_angle_rad, 0.0, kPi)},
         {"max_distance_m", pos(s.normal.max_distance_m, 1e4)}}},

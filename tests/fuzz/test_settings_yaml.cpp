@@ -71,7 +71,7 @@ TEST_CASE("settings YAML: numeric values outside their domain are ConfigErrors n
       {"solver:\n  max_iterations: 2.5\n", "'solver.max_iterations' = '2.5' is not an integer"},
       {"map:\n  radius_m: .inf\n", "'map.radius_m' = .inf is outside its domain"},
       {"preprocess:\n  min_range_m: -0.5\n", "'preprocess.min_range_m' = -0.5"},
-      {"nearest:\n  k: 6\n", "'nearest.k' = 6 is outside its domain [1, 5]"},
+      {"nearest:\n  k: 0\n", "'nearest.k' = 0 is outside its domain [1, 64]"},
       {"semantic_keyframes:\n  weight_min: 1.5\n", "'semantic_keyframes.weight_min' = 1.5"},
       {"graph:\n  huber_delta: 0\n", "'graph.huber_delta' = 0 is outside its domain (0, "},
       {"semantic_map:\n  leaf_size_m: -1\n", "'semantic_map.leaf_size_m' = -1"},
