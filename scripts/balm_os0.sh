@@ -7,13 +7,15 @@
 # Usage: scripts/balm_os0.sh PATH_TO_balm_os0 [OUT_DIR]
 #   Environment: SENSOR_YAML (default: the sensor section written below:
 #   profile auto = detect the beam table, platform hand_held), PRESET
-#   (baseline | full, default baseline), CXX (default g++).
+#   (baseline | full, default baseline), SEMLIO_RUN (path of a semlio_run
+#   binary: run through the tool), CXX (default g++).
 #
 # The sensor settings come from the library (BeamDetector, resolve_sensor,
 # settings_for_sensor with the hand-held motion profile): nothing here is
-# tuned to this recording. semlio_kitti does not read the YAML's sensor
-# section yet, so the run goes through scripts/balm_os0_odometry.cpp, built
-# here against include/ (about 1-4 minutes). Evaluation:
+# tuned to this recording. With SEMLIO_RUN set the run goes through
+# semlio_run --sensor FILE.yaml; otherwise through
+# scripts/balm_os0_odometry.cpp, built here against include/ (1-4 minutes),
+# the same library calls (configure_sensor) without the tool. Evaluation:
 # scripts/balm_os0_eval.py (pure Python). Exit 0 when every must-hold passes.
 set -euo pipefail
 if [[ $# -lt 1 ]]; then
@@ -35,12 +37,33 @@ sensor:
   platform: hand_held  # how the sensor is carried: sets the correction gates
 YAML
 fi
-# yaml-cpp and Eigen headers (Debian: libyaml-cpp-dev, libeigen3-dev; scripts/install_deps.sh).
-driver="$out/balm_os0_odometry"
-"${CXX:-g++}" -O2 -DNDEBUG -std=c++20 -I "$root/include" -I "$root/examples/common" -isystem /usr/include/eigen3 \
-  "$root/scripts/balm_os0_odometry.cpp" -o "$driver" -lyaml-cpp
-SECONDS=0
-"$driver" "$seq" "$yaml" "$out" "${PRESET:-baseline}"
-echo "run: $(ls "$seq"/velodyne/*.bin | wc -l) keyframes in ${SECONDS} s, outputs in $out"
+if [[ -n "${SEMLIO_RUN:-}" ]]; then
+  # The tool: semlio_run reads the sensor YAML (--sensor FILE.yaml) itself.
+  # --kitti-correction off: the folder has the KITTI layout but not KITTI's
+  # HDL-64E calibration.
+  SECONDS=0
+  "$SEMLIO_RUN" --input "$seq" --format kitti --sensor "$yaml" --kitti-correction off --labels none \
+    --preset "${PRESET:-baseline}" --map off --quiet --out "$out/run"
+  echo "run: semlio_run, $(ls "$seq"/velodyne/*.bin | wc -l) keyframes in ${SECONDS} s, outputs in $out/run"
+  cp "$out/run/poses_odom.txt" "$out/poses.txt"
+  python3 - "$out/run/report.json" "$out/status.txt" "$out/sensor.txt" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+with open(sys.argv[2], "w") as f:
+    for fr in r["frames"]:
+        f.write(fr["status"] + "\n")
+with open(sys.argv[3], "w") as f:
+    for k, v in r.get("sensor", {}).items():
+        f.write(f"{k} {v}\n")
+PY
+else
+  # yaml-cpp and Eigen headers (Debian: libyaml-cpp-dev, libeigen3-dev; scripts/install_deps.sh).
+  driver="$out/balm_os0_odometry"
+  "${CXX:-g++}" -O2 -DNDEBUG -std=c++20 -I "$root/include" -I "$root/examples/common" -isystem /usr/include/eigen3 \
+    "$root/scripts/balm_os0_odometry.cpp" -o "$driver" -lyaml-cpp
+  SECONDS=0
+  "$driver" "$seq" "$yaml" "$out" "${PRESET:-baseline}"
+  echo "run: scripts/balm_os0_odometry.cpp, $(ls "$seq"/velodyne/*.bin | wc -l) keyframes in ${SECONDS} s, outputs in $out"
+fi
 # /usr/bin/python3 or any python3: the evaluation needs only the standard library.
 python3 "$root/scripts/balm_os0_eval.py" "$seq/poses.txt" "$out/poses.txt" "$out/status.txt" "$out/sensor.txt"
