@@ -4,7 +4,7 @@
 /// Jacobians with respect to right perturbations of T_i and T_j.
 ///
 /// Convention (one for every comparison; see ErrorFrame / RotationError).
-/// semlio's default reproduces the reference chi2 values of the data README
+/// semlio's default reproduces the reference chi2 values of tests/data/posegraphs/README.md
 /// (an independent Ceres solution with the "2 vec" rotation error, whitened
 /// with U, Omega = U^T U). With E = Z_ij^-1 T_i^-1 T_j (q_e its quaternion,
 /// w >= 0):

@@ -75,7 +75,7 @@ struct LocalMapConfig {
   std::size_t max_keyframes = 1000;  ///< keyframes stored at most (file comment: which are dropped); 0 = keep all
   /// Each voxel's point is its first point -- of the oldest active keyframe
   /// that has one there -- instead of the centroid, so map points stay put
-  /// while keyframes arrive (README, frame time: an experiment towards a map
+  /// while keyframes arrive (bench_frame_time, scripts/frame_time_configs.sh: an experiment towards a map
   /// whose cached axes survive keyframes). Labels stay the majority.
   bool keep_first_point = false;
 };
@@ -498,7 +498,7 @@ class LocalMap {
       // still reallocated, 0.2-1.2 ms each. Room for four more keyframes like
       // this one as well: 6 of 20 there, 23 of 424 on the drive, the same
       // eighth at rest (full preset, bench_frame_time: map stage 2.43 -> 2.05
-      // ms median on keyframes, README frame time).
+      // ms median on keyframes; scripts/frame_time.sh).
       const std::size_t needed = m.entries.size() + m.fresh.size();
       if (m.entries.capacity() < needed) m.entries.reserve(needed + std::max(needed / 8, 4 * m.fresh.size()));
       detail::merge_sorted_entries(m.entries, m.fresh);

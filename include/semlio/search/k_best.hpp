@@ -20,7 +20,7 @@ namespace semlio::detail {
 /// from a NaN query) sorts after every number. One integer comparison
 /// replaces a float comparison and an index tie-break -- the hottest branches
 /// of every k-nearest search (10-NN axes 7 %, 32-NN lists 5 % faster,
-/// `MapKnn`; full-preset frame median 37.0 -> 34.2 ms: README, frame time).
+/// benchmark `MapKnn/*` in bench_gauss_newton; full-preset frame median 37.0 -> 34.2 ms: bench_frame_time).
 inline std::uint64_t distance_index_key(float sq_dist, std::uint32_t index) noexcept {
   return (std::uint64_t{std::bit_cast<std::uint32_t>(sq_dist)} << 32U) | index;
 }

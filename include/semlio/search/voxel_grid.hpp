@@ -251,7 +251,7 @@ class VoxelGrid {
     // ascending). First indices are unique, so (first, cell) keys sort to the
     // one order; a radix sort on the first index, not a comparison sort
     // through the cells (the surfaces come in ring order: ~5 000 voxels a
-    // KITTI scan; 0.2 ms of its extraction, README frame time).
+    // KITTI scan; 0.2 ms of its extraction, bench_features BM_LoamFeatureExtraction_KittiScan).
     order_.resize(nc);
     std::uint32_t max_first = 0;
     for (std::uint32_t c = 0; c < nc; ++c) {

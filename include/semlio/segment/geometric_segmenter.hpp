@@ -40,7 +40,7 @@
 ///    Points outside the grid (`grid_radius_m`) stay kUnlabeled.
 /// Runs in a few milliseconds on a 120k-point KITTI scan, deterministic, and
 /// allocates nothing once its buffers have grown to the largest scan seen.
-/// Quality: README "Segmenter quality" (scripts/segmenter_miou.sh).
+/// Quality: per-class IoU from scripts/segmenter_miou.sh (docs/results.md; CTest script_segmenter_miou).
 
 #include <Eigen/Core>
 
