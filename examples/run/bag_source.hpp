@@ -21,6 +21,7 @@
 #include <semlio/io/bag/rosbag1.hpp>
 #include <semlio/io/bag/sqlite_bag.hpp>
 #include <semlio/io/cdr_msgs.hpp>
+#include <semlio/io/kitti.hpp>
 #include <semlio/io/pointcloud2.hpp>
 #include <semlio/io/ros1_msgs.hpp>
 #include <semlio/io/ros_msgs.hpp>
@@ -85,10 +86,13 @@ template <typename Reader>
 class BagSource final : public FrameSource {
  public:
   /// Opens the bag and chooses the topics (see the file comment); `gt`: an
-  /// optional ground truth (KITTI 3x4 or TUM, one pose per cloud).
+  /// optional ground truth (KITTI 3x4 or TUM, one pose per cloud); `calib`:
+  /// an optional KITTI calib.txt whose Tr puts that ground truth (and the
+  /// outputs) in KITTI's camera-0 frame, as for a semlio_simulate drive.
   BagSource(const std::string& path, const std::string& format, const std::string& lidar_topic,
-            const std::string& imu_topic, const std::string& gt)
+            const std::string& imu_topic, const std::string& gt, const std::string& calib)
       : path_(path), frames_(path), gt_path_(gt) {
+    if (!calib.empty()) Tr_ = semlio::io::read_kitti_calib(calib).T_cam0_velo;
     facts_.format = format;
     facts_.path = path;
     const std::vector<semlio::io::BagTopic>& topics = frames_.topics();
@@ -126,8 +130,11 @@ class BagSource final : public FrameSource {
 
   [[nodiscard]] std::optional<std::vector<semlio::SE3d>> ground_truth_lidar() const override {
     if (gt_path_.empty()) return std::nullopt;
-    return read_poses(gt_path_);
+    std::vector<semlio::SE3d> gt = read_poses(gt_path_);
+    if (Tr_) gt = semlio::io::camera_to_lidar(gt, *Tr_);
+    return gt;
   }
+  [[nodiscard]] std::optional<semlio::SE3d> T_cam0_lidar() const override { return Tr_; }
   [[nodiscard]] std::string ground_truth_source() const override { return gt_path_; }
 
   [[nodiscard]] ImuInput imu() const override {
@@ -228,6 +235,7 @@ class BagSource final : public FrameSource {
   std::string path_;
   Reader frames_;
   std::string gt_path_;
+  std::optional<semlio::SE3d> Tr_;
   std::size_t lidar_ = 0;
   std::optional<std::size_t> imu_;
   semlio::io::BagMessage message_;
@@ -240,15 +248,15 @@ class BagSource final : public FrameSource {
 /// The bag source for `format` (bag, mcap, db3).
 inline std::unique_ptr<FrameSource> open_bag_source(const std::string& path, const std::string& format,
                                                     const std::string& lidar_topic, const std::string& imu_topic,
-                                                    const std::string& gt) {
+                                                    const std::string& gt, const std::string& calib) {
   if (format == "bag") {
-    return std::make_unique<BagSource<semlio::io::RosBag1Reader>>(path, format, lidar_topic, imu_topic, gt);
+    return std::make_unique<BagSource<semlio::io::RosBag1Reader>>(path, format, lidar_topic, imu_topic, gt, calib);
   }
   if (format == "mcap") {
-    return std::make_unique<BagSource<semlio::io::McapReader>>(path, format, lidar_topic, imu_topic, gt);
+    return std::make_unique<BagSource<semlio::io::McapReader>>(path, format, lidar_topic, imu_topic, gt, calib);
   }
   if (format == "db3") {
-    return std::make_unique<BagSource<semlio::io::SqliteBagReader>>(path, format, lidar_topic, imu_topic, gt);
+    return std::make_unique<BagSource<semlio::io::SqliteBagReader>>(path, format, lidar_topic, imu_topic, gt, calib);
   }
   throw semlio::ConfigError(path + ": unknown bag format " + format);
 }

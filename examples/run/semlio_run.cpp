@@ -118,7 +118,9 @@ int main(int argc, char** argv) {
                  "between frames); default: the sensor YAML's platform")
       ->check(CLI::IsMember({"vehicle", "hand_held"}));
   app.add_option("--gt", in.gt, "ground-truth poses (KITTI 3x4 or TUM); default: the input's own, if any");
-  app.add_option("--calib", in.calib, "calib.txt (kitti) or the folder of calib_*.txt (kitti-raw)");
+  app.add_option("--calib", in.calib,
+                 "calib.txt with Tr (kitti, bags: ground truth and outputs in KITTI's camera-0 frame), or the folder "
+                 "of the calib_*.txt files (kitti-raw)");
   semlio_examples::add_run_options(app, opt);
   try {
     app.parse(argc, argv);
@@ -143,7 +145,7 @@ int main(int argc, char** argv) {
       source = std::make_unique<semlio_examples::ScanFolderSource>(in.input, in.gt);
     } else {
 #if defined(SEMLIO_HAVE_BAGS)
-      source = semlio_examples::open_bag_source(in.input, format, in.lidar_topic, in.imu_topic, in.gt);
+      source = semlio_examples::open_bag_source(in.input, format, in.lidar_topic, in.imu_topic, in.gt, in.calib);
 #else
       throw semlio::ConfigError(in.input + ": this build has no bag readers (install libbz2-dev liblz4-dev "
                                 "libzstd-dev libsqlite3-dev and reconfigure)");
