@@ -126,7 +126,16 @@ struct GaussNewtonConfig {
   double degeneracy_length_m = 1.0;        ///< the normalised test weighs a rotation by the displacement it gives at this distance [m] (file comment)
   bool remap_degenerate = true;            ///< project steps away from degenerate directions
   bool reanalyse_degeneracy = false;       ///< repeat the analysis after every re-association (default: first iteration only, as LIO-SAM; registration from far off turns it on)
-  bool reset_weak_directions = false;      ///< put the flagged directions (degeneracy_ratio) back at the start (see gauss_newton())
+  bool reset_weak_directions = false;      ///< put the weak directions (weak_reset_ratio) back at the start (see gauss_newton())
+  /// With reset_weak_directions: directions whose normalised eigenvalue is
+  /// below max(this, degeneracy_ratio) are put back at the start. A start
+  /// that is a measured prediction (the LIO's IMU) is better than a weak
+  /// lidar solution well above the point where the flag calls a direction
+  /// unconstrained; 0.25 is the share of the translational information below
+  /// which the reset held directions before the flag was normalised (it
+  /// keeps tests/imu/test_lidar_inertial.cpp's distorted-drive start-up
+  /// at the constant-velocity prediction along the road).
+  double weak_reset_ratio = 0.25;
   /// Damp degenerate directions instead of freezing them: their eigenvalues
   /// are raised to degeneracy_threshold (a prior of that information at the
   /// current pose), so a weak direction takes a shortened step instead of
@@ -475,13 +484,18 @@ SolveReport gauss_newton(Problem& problem, SE3d& T, const GaussNewtonConfig& con
 
   // Stage 2: the normalised test on the final system (its Hessian is in the
   // report) sets the flag.
-  const Matrix6 P = detail::degeneracy_projection(report.hessian, config, report);
+  detail::degeneracy_projection(report.hessian, config, report);
   if (!config.remap_degenerate || !config.reset_weak_directions) return report;
-  // Re-solve only when a flagged direction was not already held by stage 1
+  // The reset's own analysis (weak_reset_ratio); the report keeps the flag's.
+  GaussNewtonConfig reset_config = config;
+  reset_config.degeneracy_ratio = std::max(config.degeneracy_ratio, config.weak_reset_ratio);
+  SolveReport weak = report;
+  const Matrix6 P = detail::degeneracy_projection(report.hessian, reset_config, weak);
+  // Re-solve only when a weak direction was not already held by stage 1
   // (information above the absolute threshold: it took full steps there).
   bool stepped = false;
-  for (int k = 0; k < report.degenerate_directions; ++k) {
-    stepped = stepped || !(report.eigenvalues[k] < config.degeneracy_threshold);
+  for (int k = 0; k < weak.degenerate_directions; ++k) {
+    stepped = stepped || !(weak.eigenvalues[k] < config.degeneracy_threshold);
   }
   if (!stepped) return report;
   SE3d T_reset = T_initial * SE3d::exp(P * (T_initial.inverse() * T).log());
