@@ -650,7 +650,7 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
   std::optional<semlio::eval::AteReport> ate_kf;
   std::optional<semlio::eval::AteReport> ate_odom;
   std::optional<semlio::eval::KittiMetricReport> kitti;
-  if (ctx.gt_lidar && n >= 3) {
+  if (ctx.gt_lidar && n >= 1) {
     const std::vector<SE3d> gt(ctx.gt_lidar->begin(), ctx.gt_lidar->begin() + static_cast<long>(n));
     ate_all = semlio::eval::ate(gt, fp.poses);
     ate_odom = semlio::eval::ate(gt, fp.poses_odom);
