@@ -819,6 +819,13 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
       j.field("iterations", r.solve.iterations).field("solver_status", semlio::to_string(r.solve.status));
       j.field("degenerate_directions", r.solve.degenerate_directions);
       j.array_field("eigenvalues", std::vector<double>(r.solve.eigenvalues.data(), r.solve.eigenvalues.data() + 6));
+      // Per-axis observability: the normalised eigenvalues the degeneracy
+      // flag tests (solve/gauss_newton.hpp) and the weakest direction
+      // [rho; phi] (eigenvectors' first column).
+      j.array_field("normalized_eigenvalues", std::vector<double>(r.solve.normalized_eigenvalues.data(),
+                                                                  r.solve.normalized_eigenvalues.data() + 6));
+      const Eigen::Matrix<double, 6, 1> weakest = r.solve.eigenvectors.col(0);
+      j.array_field("weakest_direction", std::vector<double>(weakest.data(), weakest.data() + 6));
       write_timings(j, r.timings);
       j.field("backend_ms", result.back_end[i].backend_ms).field("total_ms", result.back_end[i].total_ms);
       j.field("cpu_ms", result.back_end[i].cpu_ms);
