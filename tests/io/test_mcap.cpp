@@ -532,7 +532,7 @@ TEST_CASE("MCAP: a chunk index that states a later start time than its chunk hol
   CHECK_THROWS_AS(read_all(reader), semlio::FormatError);
 }
 
-TEST_CASE("MCAP: a rosbag2 folder with one .mcap file opens; one with two does not", "[io][bags][mcap]") {
+TEST_CASE("MCAP: a rosbag2 folder with one .mcap file opens, one with two does not", "[io][bags][mcap]") {
   semlio_test::CloudTempDir dir("mcap_folder");
   const std::filesystem::path folder = dir.file("bag");
   std::filesystem::create_directories(folder);

@@ -343,7 +343,7 @@ TEST_CASE("pointcloud2: float64 coordinates, big-endian, with int16 ring", "[io]
   CHECK(layout.header_minus_earliest_s == 0.0);
 }
 
-TEST_CASE("pointcloud2: intensity falls back to reflectivity; configured lists and time modes", "[io][pointcloud2]") {
+TEST_CASE("pointcloud2: intensity falls back to reflectivity, configured lists and time modes", "[io][pointcloud2]") {
   CloudWriter w(1, 4, 16, 0, {field("x", 0, kF32), field("y", 4, kF32), field("z", 8, kF32), field("reflectivity", 12, kU16)});
   for (std::uint32_t j = 0; j < 4; ++j) {
     w.put(0, j, "x", px(j));
@@ -367,7 +367,7 @@ TEST_CASE("pointcloud2: intensity falls back to reflectivity; configured lists a
   CHECK(s.times_s[3] == Approx(3e-9).margin(1e-12));
 }
 
-TEST_CASE("pointcloud2: zero points can be kept; an empty cloud is an empty scan", "[io][pointcloud2]") {
+TEST_CASE("pointcloud2: zero points can be kept, an empty cloud is an empty scan", "[io][pointcloud2]") {
   CloudWriter w(1, 2, 12, 0, {field("x", 0, kF32), field("y", 4, kF32), field("z", 8, kF32)});
   w.put(0, 0, "x", 0.0F);
   w.put(0, 0, "y", 0.0F);

@@ -264,7 +264,7 @@ TEST_CASE("rosbag1: every driver layout in the quirk bags decodes to the script'
   }
 }
 
-TEST_CASE("rosbag1: select() filters topics and restarts; IMU values match the script", "[io][rosbag1]") {
+TEST_CASE("rosbag1: select() filters topics and restarts, IMU values match the script", "[io][rosbag1]") {
   RosBag1Reader reader(bag("quirks_bz2.bag"));
   reader.select({"/imu/data"});
   BagMessage m;

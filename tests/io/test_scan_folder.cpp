@@ -189,7 +189,7 @@ TEST_CASE("scan folder: ground truth from poses.txt, KITTI 3x4 or TUM", "[io]") 
   CHECK_THROWS_AS(io::ScanFolder(dir.file("f"), c), semlio::IoError);
 }
 
-TEST_CASE("scan folder: a corrupt file costs one frame; bad folders give typed errors", "[io]") {
+TEST_CASE("scan folder: a corrupt file costs one frame, bad folders give typed errors", "[io]") {
   semlio_test::KittiTempDir dir("folder");
   write_scans(dir, "c", {"000000.pcd", "000001.pcd", "000002.pcd"});
   semlio_test::write_text(dir.file("c/000001.pcd"), "VERSION 0.7\nFIELDS x y z\n");  // header cut short
