@@ -7,7 +7,7 @@
 # temporary file); a second run into the same OUT without --overwrite is
 # refused, and with it OUT holds only the new run's files.
 #   scripts/interrupt_check.sh SCANS_DIR [FRAMES]
-#     SCANS_DIR e.g. ../shared/data/kitti_raw/snippet_22 (any input semlio_run reads)
+#     SCANS_DIR: any input semlio_run reads, e.g. a folder of real KITTI raw PCD scans
 # Environment: BUILD_DIR (default build), SKIP_BUILD=1, OUT (default results/interrupt_check).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -6,7 +6,7 @@
 # must-holds: path length within 1 % of the OXTS one, ATE (SE(3)-aligned)
 # <= 0.15 m.
 #   scripts/kitti_raw_drive.sh DRIVE_DIR [PRESETS]
-#     DRIVE_DIR e.g. ../shared/data/kitti_raw/2011_09_26_drive_0009_sync
+#     DRIVE_DIR: a YYYY_MM_DD_drive_NNNN_sync folder as published (calibration beside it)
 #     PRESETS: "baseline full" (default)
 # Environment: BUILD_DIR (default build), SKIP_BUILD=1 (use it as built),
 # OUT (default results/kitti_raw_drive), REPORT_ONLY=1 (exit 0 whatever the verdict).
