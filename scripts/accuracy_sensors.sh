@@ -53,7 +53,7 @@ sensor_args() {
     return
   fi
   printf 'sensor: %s\n' "$sensor" > "$dir/sensor.yaml"
-  if "$KITTI" --sequence "$dir/drive" --config "$dir/sensor.yaml" --first 0 --last 1 --out "$dir/probe" --quiet \
+  if "$KITTI" --sequence "$dir/drive" --config "$dir/sensor.yaml" --first 0 --last 1 --out "$dir/probe" --quiet --overwrite \
       > "$dir/probe.log" 2>&1; then
     echo "--config $dir/sensor.yaml"
   else
@@ -81,7 +81,7 @@ for sensor in $SENSORS; do
   echo "== $sensor: semlio_kitti --preset $PRESET --labels $LABELS --kitti-correction off $args"
   # shellcheck disable=SC2086
   "$KITTI" --sequence "$dir/drive" --labels "$LABELS" --preset "$PRESET" --kitti-correction off $args \
-    --out "$dir/odometry" --quiet > "$dir/odometry.log" 2>&1 || { cat "$dir/odometry.log"; status=1; }
+    --out "$dir/odometry" --quiet --overwrite > "$dir/odometry.log" 2>&1 || { cat "$dir/odometry.log"; status=1; }
   terr=$(/usr/bin/python3 -c '
 import json, sys
 r = json.load(open(sys.argv[1]))

@@ -22,7 +22,7 @@ if [ -z "${SKIP_BUILD:-}" ]; then
 fi
 "$BUILD_DIR/examples/semlio_simulate" --world urban --traffic "$TRAFFIC" --frames "$FRAMES" --seed "$SEED" --out "$OUT/drive"
 for preset in baseline full; do
-  "$BUILD_DIR/examples/semlio_kitti" --sequence "$OUT/drive" --labels "$LABELS" --preset "$preset" --out "$OUT/$preset" --quiet
+  "$BUILD_DIR/examples/semlio_kitti" --sequence "$OUT/drive" --labels "$LABELS" --preset "$preset" --out "$OUT/$preset" --quiet --overwrite
 done
 /usr/bin/python3 scripts/compare_reports.py "$OUT/baseline/report.json" "$OUT/full/report.json"
 rm -rf "$OUT/drive/velodyne"  # 2+ GB of scans; the rest of the drive is kept

@@ -43,7 +43,7 @@ if [[ -n "${SEMLIO_RUN:-}" ]]; then
   # HDL-64E calibration.
   SECONDS=0
   "$SEMLIO_RUN" --input "$seq" --format kitti --sensor "$yaml" --kitti-correction off --labels none \
-    --preset "${PRESET:-baseline}" --map off --quiet --out "$out/run"
+    --preset "${PRESET:-baseline}" --map off --quiet --out "$out/run" --overwrite
   echo "run: semlio_run, $(ls "$seq"/velodyne/*.bin | wc -l) keyframes in ${SECONDS} s, outputs in $out/run"
   cp "$out/run/poses_odom.txt" "$out/poses.txt"
   python3 - "$out/run/report.json" "$out/status.txt" "$out/sensor.txt" <<'PY'

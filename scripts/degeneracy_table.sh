@@ -65,7 +65,7 @@ run() {  # NAME SEQUENCE LABELS EXTRA...
   shift 3
   for preset in baseline full; do
     "$BIN/semlio_kitti" --sequence "$seq" --labels "$labels" --preset "$preset" --map off --quiet \
-      --out "$OUT/run_${name}_$preset" "$@" > "$OUT/run_${name}_$preset.log" 2>&1 ||
+      --out "$OUT/run_${name}_$preset" --overwrite "$@" > "$OUT/run_${name}_$preset.log" 2>&1 ||
       { echo "semlio_kitti failed on $name ($preset), see $OUT/run_${name}_$preset.log"; exit 1; }
   done
   runs+=("$name")

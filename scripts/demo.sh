@@ -30,7 +30,7 @@ echo "== simulating an urban drive: $FRAMES frames, $TRAFFIC traffic, seed $SEED
 
 for preset in baseline full; do
   echo "== semlio_kitti --preset $preset --labels predictions"
-  "$BIN/semlio_kitti" --sequence "$OUT/drive" --labels predictions --preset "$preset" --out "$OUT/$preset" --quiet
+  "$BIN/semlio_kitti" --sequence "$OUT/drive" --labels predictions --preset "$preset" --out "$OUT/$preset" --quiet --overwrite
 done
 
 /usr/bin/python3 scripts/compare_reports.py "$OUT/baseline/report.json" "$OUT/full/report.json"

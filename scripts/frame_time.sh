@@ -63,7 +63,7 @@ for seq in "${sequences[@]}"; do
   for preset in baseline full; do
     run="$OUT/run_${seq}_${preset}"
     /usr/bin/time -f "%U %S %e" -o "$run.time" taskset -c "$CORE" "$BIN/semlio_kitti" --sequence "$OUT/$seq" \
-      --labels "$labels" --preset "$preset" --kitti-correction "$correction" --out "$run" --quiet > "$run.log" 2>&1
+      --labels "$labels" --preset "$preset" --kitti-correction "$correction" --out "$run" --quiet --overwrite > "$run.log" 2>&1
     taskset -c "$CORE" "$BENCH" --sequence "$OUT/$seq" --preset "$preset" --labels "$labels" --repeat "$REPEAT" > "$run.cpu.txt"
     /usr/bin/python3 - "$seq" "$preset" "$run/report.json" "$run.time" "$run.cpu.txt" <<'PY'
 import json, sys

@@ -40,7 +40,7 @@ for round in $(seq 1 "$ROUNDS"); do
     for preset in $PRESETS; do
       run="$OUT/${name}_${preset}_$round"
       if ! taskset -c "$CORE" "$BUILD_DIR/examples/semlio_kitti" --sequence "$SEQ" --labels "$LABELS" \
-          --preset "$preset" --kitti-correction "$KITTI_CORRECTION" --config "$config" --out "$run" --quiet \
+          --preset "$preset" --kitti-correction "$KITTI_CORRECTION" --config "$config" --out "$run" --quiet --overwrite \
           > "$run.log" 2>&1; then
         echo "semlio_kitti failed: $config, $preset (see $run.log)"
         tail -n 3 "$run.log"

@@ -70,7 +70,7 @@ for preset in $PRESETS; do
     ok=1
     for d in fwd bwd; do
       if ! "$KITTI_BIN" --sequence "$OUT/$d" --labels none --preset "$preset" --kitti-correction on \
-          --config "$OUT/${deskew}_${d}.yaml" --out "$OUT/run_${tag}_$d" --quiet > "$OUT/run_${tag}_$d.log" 2>&1; then
+          --config "$OUT/${deskew}_${d}.yaml" --out "$OUT/run_${tag}_$d" --quiet --overwrite > "$OUT/run_${tag}_$d.log" 2>&1; then
         echo "$tag: semlio_kitti failed ($d), see $OUT/run_${tag}_$d.log:"
         tail -n 3 "$OUT/run_${tag}_$d.log"
         if grep -q "deskew" "$OUT/run_${tag}_$d.log"; then

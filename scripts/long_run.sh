@@ -40,7 +40,7 @@ if [ -z "$REPORT" ]; then
       --out "$DRIVE"
   fi
   "$BUILD_DIR/examples/semlio_kitti" --sequence "$DRIVE" --labels "$LABELS" --preset "$PRESET" --loop "$LOOP" \
-    --out "$OUT/run" --quiet
+    --out "$OUT/run" --quiet --overwrite
   REPORT=$OUT/run/report.json
 fi
 

@@ -84,7 +84,7 @@ PY
 
 run() {
   "$BUILD_DIR/examples/semlio_kitti" --sequence "$DRIVE" --labels "$LABELS" --preset "$PRESET" \
-    --loop "$1" --loop-detector "$DETECTOR" --config "$CONFIG" --out "$OUT/loop_$1" --quiet
+    --loop "$1" --loop-detector "$DETECTOR" --config "$CONFIG" --out "$OUT/loop_$1" --quiet --overwrite
 }
 run on
 if [ -z "${ONE_RUN:-}" ]; then run off; fi

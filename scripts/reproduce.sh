@@ -189,7 +189,7 @@ while IFS=$'\t' read -r name dir kind scene labels extra ref; do
     [[ -s "$cfg" ]] || echo "{}" > "$cfg"
     echo "== $name: $cname (semlio_kitti --preset $preset --labels $lab)"
     "$BIN/semlio_kitti" --sequence "$dir" --preset "$preset" --labels "$lab" --config "$cfg" --map off \
-      "${last[@]}" --out "$OUT/runs/$name/$cname" --quiet > "$OUT/runs/$name.$cname.log" 2>&1 ||
+      "${last[@]}" --out "$OUT/runs/$name/$cname" --quiet --overwrite > "$OUT/runs/$name.$cname.log" 2>&1 ||
       { cat "$OUT/runs/$name.$cname.log" >&2; exit 1; }
   done
   # The scans of simulated drives are large (~16 MB per frame) and no longer needed.

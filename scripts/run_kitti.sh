@@ -17,7 +17,7 @@ scripts/install_deps.sh python3-matplotlib
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
 cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_kitti semlio_eval
 for preset in baseline full; do
-  "$BUILD_DIR/examples/semlio_kitti" --sequence "$SEQ" --preset "$preset" --out "$OUT/$preset" --quiet "$@"
+  "$BUILD_DIR/examples/semlio_kitti" --sequence "$SEQ" --preset "$preset" --out "$OUT/$preset" --quiet --overwrite "$@"
 done
 /usr/bin/python3 scripts/compare_reports.py "$OUT/baseline/report.json" "$OUT/full/report.json"
 GT=()
