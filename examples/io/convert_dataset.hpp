@@ -6,8 +6,10 @@
 //   --to kitti: velodyne/NNNNNN.bin (x y z intensity float32, intensity 0 when
 //     the input has none), labels/NNNNNN.label when the input has labels,
 //     times.txt (seconds since the first frame), calib.txt (Tr: the input's
-//     T_cam0_lidar, else identity), poses.txt (ground truth in KITTI camera-0
-//     convention P_i = Tr T_i Tr^-1, when the input has one), convert.json.
+//     T_cam0_lidar, else identity; every entry of the input's calib.txt kept
+//     exactly), poses.txt (ground truth in KITTI camera-0 convention
+//     P_i = Tr T_i Tr^-1, when the input has one; a KITTI-format ground-truth
+//     file's lines are copied as they are), convert.json.
 //     A frame that cannot be read, or holds no valid point, has no .bin (a
 //     KITTI .bin cannot hold an empty scan): a gap in the numbering, kept in
 //     times.txt and poses.txt, which KittiSequence reads as a missing frame
@@ -181,6 +183,33 @@ inline std::string exact_text(double v) {
   return buf;
 }
 
+/// The calib.txt the input's Tr came from: --calib (KITTI folders and bags;
+/// KITTI raw takes a folder of calib_*.txt), else a KITTI folder's own; "" when none.
+inline std::string input_calib_file(const ConvertOptions& o, const std::string& format) {
+  std::error_code ec;
+  if (format == "kitti-raw" || format == "folder") return {};
+  if (!o.calib.empty()) return fs::is_regular_file(o.calib, ec) ? o.calib : std::string();
+  if (format != "kitti") return {};
+  const fs::path own = fs::path(o.input) / "calib.txt";
+  return fs::is_regular_file(own, ec) ? own.string() : std::string();
+}
+
+/// Copies the non-blank lines first..first+count-1 of a KITTI poses file to
+/// `out`. Throws IoError.
+inline void copy_lines(const std::string& in, std::size_t first, std::size_t count, const fs::path& out) {
+  std::ifstream is(in);
+  if (!is) throw semlio::IoError(in + ": cannot read the ground truth");
+  std::ofstream os(out);
+  std::string line;
+  std::size_t i = 0;
+  while (i < first + count && std::getline(is, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.find_first_not_of(" \t") == std::string::npos) continue;
+    if (i++ >= first) os << line << '\n';
+  }
+  if (!os) throw semlio::IoError(out.string() + ": write error");
+}
+
 /// One selected input frame that was not written as read.
 struct SkippedFrame {
   std::size_t input_frame = 0;  ///< index in the input
@@ -326,18 +355,36 @@ inline int convert_dataset(const ConvertOptions& o) {
 
     std::string calib_note = "none written (the input has no camera calibration)";
     if (to_kitti || input_Tr) {
+      // The input's calib.txt entries as read (P0..P3, Tr, Tr_imu_velo): its
+      // numbers written back exactly, so Tr reads back bit for bit (an SE3
+      // holds a quaternion: writing it as a matrix would move the last digits).
       semlio::io::Calibration calib;
-      calib.T_cam0_velo = Tr;
+      const std::string calib_file = detail::input_calib_file(o, facts.format);
+      if (!calib_file.empty()) calib = semlio::io::read_kitti_calib(calib_file);
+      calib.T_cam0_velo.reset();  // set transforms override the entries as read
+      calib.T_imu_velo.reset();
+      if (calib.entries.count("Tr") == 0) calib.T_cam0_velo = Tr;
       semlio::io::write_kitti_calib((dir / "calib.txt").string(), calib);
       calib_note = input_Tr ? "Tr: the input's T_cam0_lidar" : "Tr: identity (the input has no camera calibration)";
+      if (!calib_file.empty()) calib_note += ", entries of " + calib_file;
     }
     std::string poses_note = "none (the input has no ground truth)";
     if (gt) {
-      std::vector<semlio::SE3d> sel(gt->begin() + static_cast<long>(first),
-                                    gt->begin() + static_cast<long>(first + n_out));
-      if (to_kitti) sel = semlio::io::lidar_to_camera(sel, Tr);
-      semlio::io::write_kitti_poses((dir / "poses.txt").string(), sel);
-      poses_note = "ground truth (" + source.ground_truth_source() + "), " +
+      const fs::path poses_path = dir / "poses.txt";
+      const std::string gt_file = source.ground_truth_source();
+      std::error_code ec;
+      if (to_kitti && fs::is_regular_file(gt_file, ec) && !semlio::io::looks_like_tum(gt_file)) {
+        // A KITTI 3x4 file is stored in the frame poses.txt wants (camera-0
+        // with the input's Tr, else lidar = camera-0 under the identity Tr):
+        // its lines are copied as they are.
+        detail::copy_lines(gt_file, first, n_out, poses_path);
+      } else {
+        std::vector<semlio::SE3d> sel(gt->begin() + static_cast<long>(first),
+                                      gt->begin() + static_cast<long>(first + n_out));
+        if (to_kitti) sel = semlio::io::lidar_to_camera(sel, Tr);
+        semlio::io::write_kitti_poses(poses_path.string(), sel);
+      }
+      poses_note = "ground truth (" + gt_file + "), " +
                    (to_kitti ? "KITTI camera-0 frame: P_i = Tr T_i Tr^-1" : "lidar frame, KITTI 3x4");
     }
 

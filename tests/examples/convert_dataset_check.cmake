@@ -1,7 +1,9 @@
 # semlio_convert's dataset mode end to end (run by CTest; see tests/scripts.cmake):
 #  1. the ROS 1 bag, the MCAP file and the KITTI raw drive converted to KITTI
 #     folders: semlio_run on each folder and on its original input gives
-#     byte-identical poses.txt; the folder's files and convert.json;
+#     byte-identical poses.txt (also with --gt and --calib: camera-0 outputs
+#     and evaluation); the folder's files and convert.json; KITTI -> KITTI is
+#     the identity;
 #  2. the bag converted to a PCD folder: semlio_run --format folder gives the
 #     bag's poses.txt byte for byte;
 #  3. ring and time fields: lost to KITTI (warning, convert.json), kept in PCD;
@@ -105,6 +107,42 @@ endforeach()
 if(NOT ate_r_raw STREQUAL ate_r_k_raw)
   message(FATAL_ERROR "raw: ATE against OXTS ${ate_r_raw} m, on the converted folder's poses.txt ${ate_r_k_raw} m")
 endif()
+
+# A bag with ground truth and a camera calibration (--gt, --calib): calib.txt
+# keeps the input's entries, poses.txt is the ground truth as given (camera-0
+# frame); semlio_run writes the same camera-0 poses and evaluation from both.
+set(gt "${WORK_DIR}/k_raw/poses.txt")
+set(calib "${DATA_DIR}/kitti/sequences/00/calib.txt")
+convert_ok(bag_gt --input "${DATA_DIR}/bags/kitti3_lz4.bag" --gt "${gt}" --calib "${calib}" --out "${WORK_DIR}/k_bag_gt")
+file(READ "${gt}" gt_text)
+file(READ "${WORK_DIR}/k_bag_gt/poses.txt" copied)
+file(STRINGS "${WORK_DIR}/k_bag_gt/calib.txt" calib_lines REGEX "^(P0|Tr):")
+list(LENGTH calib_lines n)
+if(NOT copied STREQUAL gt_text OR NOT n EQUAL 2)
+  message(FATAL_ERROR "bag with --gt/--calib: poses.txt is not the ground truth as given, or calib.txt lacks P0/Tr")
+endif()
+run_ok(bag_gt --input "${DATA_DIR}/bags/kitti3_lz4.bag" --gt "${gt}" --calib "${calib}" --out "${WORK_DIR}/r_bag_gt" ${common})
+run_ok(k_bag_gt --input "${WORK_DIR}/k_bag_gt" --format kitti --out "${WORK_DIR}/r_k_bag_gt" ${common})
+same_poses(r_bag_gt r_k_bag_gt)
+foreach(r r_bag_gt r_k_bag_gt)
+  file(READ "${WORK_DIR}/${r}/report.json" report)
+  string(JSON ate_${r} GET "${report}" evaluation ate_all_frames rmse_m)
+endforeach()
+file(READ "${WORK_DIR}/r_bag/poses.txt" lidar_poses)
+file(READ "${WORK_DIR}/r_bag_gt/poses.txt" camera_poses)
+if(NOT ate_r_bag_gt STREQUAL ate_r_k_bag_gt OR lidar_poses STREQUAL camera_poses)
+  message(FATAL_ERROR "bag with --gt/--calib: ATE ${ate_r_bag_gt} vs ${ate_r_k_bag_gt} m, or Tr was not applied")
+endif()
+
+# A KITTI folder converted again is the same folder, file for file.
+convert_ok(kitti_again --input "${WORK_DIR}/k_bag_gt" --out "${WORK_DIR}/k_again")
+foreach(f velodyne/000000.bin velodyne/000002.bin times.txt calib.txt poses.txt)
+  file(SHA256 "${WORK_DIR}/k_bag_gt/${f}" a)
+  file(SHA256 "${WORK_DIR}/k_again/${f}" b)
+  if(NOT a STREQUAL b)
+    message(FATAL_ERROR "KITTI -> KITTI: ${f} differs")
+  endif()
+endforeach()
 
 # 2. Bag -> PCD folder -> semlio_run --format folder.
 convert_ok(pcd --input "${DATA_DIR}/bags/kitti3_lz4.bag" --out "${WORK_DIR}/p_bag" --to pcd)
