@@ -29,6 +29,7 @@
 // output (it holds convert.json), never an arbitrary folder.
 
 #include <CLI/CLI.hpp>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstddef>
@@ -212,18 +213,246 @@ inline void copy_lines(const std::string& in, std::size_t first, std::size_t cou
 
 /// One selected input frame that was not written as read.
 struct SkippedFrame {
-  std::size_t input_frame = 0;  ///< index in the input
-  std::size_t output_frame = 0; ///< number in OUT
-  std::string reason;           ///< the reader's error, or "no valid point"
+  std::size_t input_frame = 0;   ///< index in the input
+  std::size_t output_frame = 0;  ///< number in OUT
+  std::string reason;            ///< the reader's error, or "no valid point"
 };
+
+/// What a conversion read and wrote, for convert.json and the summary.
+struct ConvertTally {
+  std::size_t n_input = 0;  ///< frames in the input
+  std::size_t first = 0;    ///< first selected input frame
+  std::size_t n_sel = 0;    ///< frames selected (first..last)
+  std::size_t n_out = 0;    ///< frames in OUT (KITTI: up to the last written one)
+  std::vector<double> stamps;      ///< per selected frame [s]
+  std::vector<bool> stamp_known;   ///< false: a bag that ended early
+  std::vector<bool> written;       ///< a scan file was written
+  std::vector<SkippedFrame> skipped;
+  std::size_t unreadable = 0, empty = 0, points = 0;
+  std::size_t no_intensity = 0, with_rings = 0, with_times = 0, labels_lost = 0;
+  semlio::io::ReadStats dropped;
+  bool labels = false;             ///< KITTI labels/ written
+  double t_origin_s = 0.0;         ///< stamp of output frame 0
+  std::size_t stamps_clamped = 0;  ///< stamps that went backwards
+  std::vector<std::string> lost;   ///< per-point fields KITTI .bin could not carry
+  std::string calib_note, poses_note;
+};
+
+inline const char* const kImuNote = "not converted (the KITTI and PCD folder layouts have no generic IMU file)";
+
+/// Reads the selected frames and writes their scans into `dir`: a bad or
+/// empty frame is skipped (KITTI) or a 0-point PCD. A bag is read in order
+/// from its start, so frames before `first` are read and discarded.
+inline void convert_frames(FrameSource& source, std::size_t last, bool to_kitti, const fs::path& dir, ConvertTally& t) {
+  const std::string& format = source.facts().format;
+  const bool sequential = format == "bag" || format == "mcap" || format == "db3";
+  t.stamps.assign(t.n_sel, 0.0);
+  t.stamp_known.assign(t.n_sel, false);
+  t.written.assign(t.n_sel, false);
+  if (to_kitti) {
+    fs::create_directories(dir / "velodyne");
+    if (t.labels) fs::create_directories(dir / "labels");
+  }
+  for (std::size_t i = sequential ? 0 : t.first; i <= last; ++i) {
+    SourceFrame f = source.read(i);
+    if (i < t.first) continue;
+    const std::size_t k = i - t.first;
+    if (isatty(STDERR_FILENO) != 0 && (k % 50 == 0 || i == last)) {  // progress on a terminal
+      std::fprintf(stderr, "\rsemlio_convert: frame %zu / %zu%s", k + 1, t.n_sel, i == last ? "\n" : "");
+    }
+    const std::optional<double> hint = source.stamp_hint(i);
+    t.stamp_known[k] = !f.missing || hint.has_value();
+    t.stamps[k] = hint && f.missing ? *hint : f.scan.stamp_s;
+    t.dropped.dropped_nonfinite += f.dropped.dropped_nonfinite;
+    t.dropped.dropped_zero += f.dropped.dropped_zero;
+    const bool bad = !f.error.empty() || f.missing;
+    if (bad || f.scan.empty()) {
+      ++(bad ? t.unreadable : t.empty);
+      t.skipped.push_back({i, k, bad ? (f.error.empty() ? "missing" : f.error) : "no valid point"});
+      if (to_kitti) continue;
+      f.scan = semlio::Scan();  // --to pcd: a 0-point PCD keeps the numbering
+    }
+    const semlio::Scan& scan = f.scan;
+    t.points += scan.size();
+    if (!scan.empty() && !scan.has_intensity()) ++t.no_intensity;
+    if (scan.has_rings()) ++t.with_rings;
+    if (scan.has_times()) ++t.with_times;
+    if (to_kitti) {
+      semlio::io::write_kitti_bin((dir / "velodyne" / (frame_name(k) + ".bin")).string(), scan);
+      if (t.labels) {
+        semlio::io::write_label_file((dir / "labels" / (frame_name(k) + ".label")).string(),
+                                     semlio::io::raw_labels(scan));
+      } else if (scan.has_labels()) {
+        ++t.labels_lost;
+      }
+    } else {
+      semlio::io::write_pcd((dir / (frame_name(k) + ".pcd")).string(), scan, semlio::io::PcdEncoding::kBinary);
+    }
+    t.written[k] = true;
+  }
+  if (to_kitti) {
+    if (t.with_rings > 0) t.lost.emplace_back("ring");
+    if (t.with_times > 0) t.lost.emplace_back("time");
+    if (t.labels_lost > 0) t.lost.emplace_back("label");
+  }
+}
+
+/// Ends a KITTI folder at its last written frame (a gap cannot end it) and
+/// writes times.txt: a frame whose stamp is unknown, or a stamp going
+/// backwards, takes the previous stamp (times.txt must not decrease).
+inline void write_times(bool to_kitti, const fs::path& dir, const std::string& input, ConvertTally& t) {
+  t.n_out = t.n_sel;
+  if (to_kitti) {
+    while (t.n_out > 0 && !t.written[t.n_out - 1]) --t.n_out;
+    if (t.n_out == 0) {
+      throw semlio::FormatError(input + ": no selected frame could be read or holds a valid point; nothing to write");
+    }
+  }
+  for (std::size_t k = 0; k < t.n_out; ++k) {
+    if (t.stamp_known[k]) {
+      t.t_origin_s = t.stamps[k];
+      break;
+    }
+  }
+  std::vector<double> times(t.n_out);
+  double previous = t.t_origin_s;
+  for (std::size_t k = 0; k < t.n_out; ++k) {
+    double stamp = t.stamps[k];
+    if (!t.stamp_known[k] || stamp < previous) {
+      if (t.stamp_known[k]) ++t.stamps_clamped;
+      stamp = previous;
+    }
+    previous = stamp;
+    // KITTI: seconds since the first frame. t - t0 is exact (Sterbenz) for
+    // stamps within a factor 2 of each other, so frame-to-frame differences
+    // are those of the input bit for bit.
+    times[k] = to_kitti ? stamp - t.t_origin_s : stamp;
+  }
+  semlio::io::write_kitti_times((dir / "times.txt").string(), times);
+}
+
+/// calib.txt (always for KITTI; for PCD when the input has Tr) and
+/// poses.txt (when the input has ground truth).
+inline void write_calib_and_poses(const ConvertOptions& o, const FrameSource& source, bool to_kitti,
+                                  const fs::path& dir, ConvertTally& t) {
+  const std::optional<semlio::SE3d> input_Tr = source.T_cam0_lidar();
+  const semlio::SE3d Tr = input_Tr ? *input_Tr : semlio::SE3d();
+  t.calib_note = "none written (the input has no camera calibration)";
+  if (to_kitti || input_Tr) {
+    // The input's calib.txt entries as read (P0..P3, Tr, Tr_imu_velo): its
+    // numbers written back exactly, so Tr reads back bit for bit (an SE3
+    // holds a quaternion: writing it as a matrix would move the last digits).
+    semlio::io::Calibration calib;
+    const std::string calib_file = input_calib_file(o, source.facts().format);
+    if (!calib_file.empty()) calib = semlio::io::read_kitti_calib(calib_file);
+    calib.T_cam0_velo.reset();  // set transforms override the entries as read
+    calib.T_imu_velo.reset();
+    if (calib.entries.count("Tr") == 0) calib.T_cam0_velo = Tr;
+    semlio::io::write_kitti_calib((dir / "calib.txt").string(), calib);
+    t.calib_note = input_Tr ? "Tr: the input's T_cam0_lidar" : "Tr: identity (the input has no camera calibration)";
+    if (!calib_file.empty()) t.calib_note += ", entries of " + calib_file;
+  }
+  t.poses_note = "none (the input has no ground truth)";
+  const std::optional<std::vector<semlio::SE3d>> gt = source.ground_truth_lidar();
+  if (!gt) return;
+  const fs::path poses_path = dir / "poses.txt";
+  const std::string gt_file = source.ground_truth_source();
+  std::error_code ec;
+  if (to_kitti && fs::is_regular_file(gt_file, ec) && !semlio::io::looks_like_tum(gt_file)) {
+    // A KITTI 3x4 file is stored in the frame poses.txt wants (camera-0 with
+    // the input's Tr, else lidar = camera-0 under the identity Tr): its lines
+    // are copied as they are.
+    copy_lines(gt_file, t.first, t.n_out, poses_path);
+  } else {
+    std::vector<semlio::SE3d> sel(gt->begin() + static_cast<long>(t.first),
+                                  gt->begin() + static_cast<long>(t.first + t.n_out));
+    if (to_kitti) sel = semlio::io::lidar_to_camera(sel, Tr);
+    semlio::io::write_kitti_poses(poses_path.string(), sel);
+  }
+  t.poses_note = "ground truth (" + gt_file + "), " +
+                 (to_kitti ? "KITTI camera-0 frame: P_i = Tr T_i Tr^-1" : "lidar frame, KITTI 3x4");
+}
+
+/// convert.json: what was read and written.
+inline void write_report(const ConvertOptions& o, const FrameSource& source, const fs::path& dir,
+                         const ConvertTally& t) {
+  const bool to_kitti = o.to == "kitti";
+  const SourceFacts& facts = source.facts();
+  std::ofstream os(dir / "convert.json");
+  JsonWriter j(os);
+  j.begin_object();
+  j.field("schema", "semlio_convert/1").field("to", o.to);
+  j.key("input").begin_object();
+  j.field("format", facts.format).field("path", facts.path);
+  for (const auto& [key, value] : facts.decided) j.field(key, value);
+  j.field("ground_truth", source.ground_truth_source());
+  j.end_object();
+  j.field("input_frames", t.n_input).field("first", t.first).field("last", t.first + t.n_sel - 1);
+  j.field("frames_selected", t.n_sel).field("frames_out", t.n_out);
+  j.field("frames_written", static_cast<std::size_t>(std::count(t.written.begin(), t.written.end(), true)));
+  j.field("unreadable_frames", t.unreadable).field("empty_frames", t.empty);
+  j.field("bad_frames_written_as",
+          to_kitti ? "no .bin: a gap in the numbering (KittiSequence allow_gaps reads it as a missing frame)"
+                   : "a 0-point PCD");
+  j.field("trailing_bad_frames_dropped", t.n_sel - t.n_out);
+  j.key("skipped").begin_array();
+  for (const SkippedFrame& s : t.skipped) {
+    j.begin_object();
+    j.field("input_frame", s.input_frame).field("output_frame", s.output_frame).field("reason", s.reason);
+    j.end_object();
+  }
+  j.end_array();
+  j.field("points_written", t.points);
+  j.key("dropped_points").begin_object();
+  j.field("nonfinite", t.dropped.dropped_nonfinite).field("zero", t.dropped.dropped_zero);
+  j.end_object();
+  j.field("labels_written", t.labels);
+  j.array_field("fields_lost", t.lost);
+  j.field("frames_with_rings", t.with_rings).field("frames_with_times", t.with_times);
+  j.field("frames_without_intensity", t.no_intensity);
+  j.field("times_txt", to_kitti ? "seconds since the first frame" : "stamps as read [s]");
+  j.field("stamp_origin_s", exact_text(t.t_origin_s));
+  j.field("stamps_clamped", t.stamps_clamped);
+  j.field("calib", t.calib_note).field("poses", t.poses_note).field("imu", kImuNote);
+  j.end_object();
+  os << '\n';
+  if (!os) throw semlio::IoError((dir / "convert.json").string() + ": write error");
+}
+
+/// The summary on stdout; the lost-fields warning on stderr.
+inline void print_summary(const ConvertOptions& o, const FrameSource& source, const fs::path& out,
+                          const ConvertTally& t) {
+  const SourceFacts& facts = source.facts();
+  std::printf("semlio_convert: %s (%s) -> %s (%s)\n", facts.path.c_str(), facts.format.c_str(), out.c_str(),
+              o.to.c_str());
+  for (const auto& [key, value] : facts.decided) std::printf("  %-18s %s\n", key.c_str(), value.c_str());
+  std::printf("  %-18s %zu of %zu selected (input frames %zu-%zu of %zu)\n", "frames out", t.n_out, t.n_sel, t.first,
+              t.first + t.n_sel - 1, t.n_input);
+  std::printf("  %-18s %zu unreadable, %zu empty%s\n", "bad frames", t.unreadable, t.empty,
+              t.skipped.empty() ? "" : (o.to == "kitti" ? " (gaps: no .bin)" : " (0-point PCDs)"));
+  if (t.n_out < t.n_sel) std::printf("  %-18s %zu after the last readable frame\n", "frames dropped", t.n_sel - t.n_out);
+  std::printf("  %-18s %zu written (%zu non-finite and %zu (0,0,0) dropped)\n", "points", t.points,
+              t.dropped.dropped_nonfinite, t.dropped.dropped_zero);
+  std::printf("  %-18s %s\n", "calib", t.calib_note.c_str());
+  std::printf("  %-18s %s\n", "poses", t.poses_note.c_str());
+  std::printf("  %-18s %s\n", "imu", kImuNote);
+  if (t.stamps_clamped > 0) {
+    std::printf("  %-18s %zu went backwards: set to the previous stamp\n", "stamps", t.stamps_clamped);
+  }
+  std::fflush(stdout);
+  if (!t.lost.empty()) {
+    std::string names;
+    for (const std::string& l : t.lost) names += (names.empty() ? "" : ", ") + l;
+    std::cerr << "semlio_convert: warning: per-point fields lost (a KITTI .bin holds x y z intensity only): " << names
+              << "; --to pcd keeps them\n";
+  }
+}
 
 }  // namespace detail
 
 /// Runs the dataset mode; returns the exit status (0; 1 for an error, printed;
 /// 2 for a bad command line).
 inline int convert_dataset(const ConvertOptions& o) {
-  namespace fs = std::filesystem;
-  using detail::frame_name;
   if (o.first < 0 || o.last < -1) {
     std::cerr << "semlio_convert: --first " << o.first << " / --last " << o.last
               << ": frames count from 0 (--last -1: the last frame)\n";
@@ -233,234 +462,36 @@ inline int convert_dataset(const ConvertOptions& o) {
     detail::StagedOutput staged(o.out, o.input, o.overwrite);
     const std::unique_ptr<FrameSource> source_ptr = open_convert_source(o);
     FrameSource& source = *source_ptr;
-    const SourceFacts& facts = source.facts();
-    const std::size_t n_input = source.size();
-    if (n_input == 0) throw semlio::FormatError(facts.path + ": no frames to convert");
-    const std::size_t last = o.last < 0 ? n_input - 1 : std::min(static_cast<std::size_t>(o.last), n_input - 1);
-    const auto first = static_cast<std::size_t>(o.first);
-    if (first > last) {
+    detail::ConvertTally t;
+    t.n_input = source.size();
+    if (t.n_input == 0) throw semlio::FormatError(source.facts().path + ": no frames to convert");
+    const std::size_t last = o.last < 0 ? t.n_input - 1 : std::min(static_cast<std::size_t>(o.last), t.n_input - 1);
+    t.first = static_cast<std::size_t>(o.first);
+    if (t.first > last) {
       std::cerr << "semlio_convert: --first " << o.first << " / --last " << o.last << " select no frame of "
-                << n_input << "\n";
+                << t.n_input << "\n";
       return 2;
     }
-    const bool to_kitti = o.to == "kitti";
-    const fs::path dir = staged.dir();
-
-    // Ground truth and calibration, checked before the first frame.
-    std::optional<std::vector<semlio::SE3d>> gt = source.ground_truth_lidar();
-    if (gt && gt->size() != n_input) {
+    t.n_sel = last - t.first + 1;
+    // Ground truth checked before the first frame.
+    if (const auto gt = source.ground_truth_lidar(); gt && gt->size() != t.n_input) {
       throw semlio::ValueError(source.ground_truth_source() + ": has " + std::to_string(gt->size()) +
-                               " poses but the input has " + std::to_string(n_input) + " frames");
+                               " poses but the input has " + std::to_string(t.n_input) + " frames");
     }
-    const std::optional<semlio::SE3d> input_Tr = source.T_cam0_lidar();
-    const semlio::SE3d Tr = input_Tr ? *input_Tr : semlio::SE3d();
-    // Labels: written for every frame when the input has them (a KITTI
-    // folder's labels/, or a label field in the first scan).
-    bool labels = source.has_labels();
-    if (!labels) {
+    // KITTI labels/: written for every frame when the input has labels (a
+    // KITTI folder's labels/, or a label field in the first scan).
+    t.labels = source.has_labels();
+    if (!t.labels) {
       const std::vector<semlio::Scan> firsts = source.first_scans(1);
-      labels = !firsts.empty() && firsts.front().has_labels();
+      t.labels = !firsts.empty() && firsts.front().has_labels();
     }
-    if (to_kitti) {
-      fs::create_directories(dir / "velodyne");
-      if (labels) fs::create_directories(dir / "labels");
-    }
-
-    // The frames. A bag is read in order from its start, so frames before
-    // --first are read and discarded; files are only read when selected.
-    const bool sequential = facts.format == "bag" || facts.format == "mcap" || facts.format == "db3";
-    const std::size_t n_sel = last - first + 1;
-    std::vector<double> stamps(n_sel, 0.0);
-    std::vector<bool> stamp_known(n_sel, false);
-    std::vector<bool> written(n_sel, false);
-    std::vector<detail::SkippedFrame> skipped;
-    std::size_t unreadable = 0, empty = 0, points = 0, no_intensity = 0, with_rings = 0, with_times = 0;
-    std::size_t labels_lost = 0;
-    semlio::io::ReadStats dropped;
-    for (std::size_t i = sequential ? 0 : first; i <= last; ++i) {
-      SourceFrame f = source.read(i);
-      if (i < first) continue;
-      const std::size_t k = i - first;
-      const std::optional<double> hint = source.stamp_hint(i);
-      stamp_known[k] = !f.missing || hint.has_value();
-      stamps[k] = hint && f.missing ? *hint : f.scan.stamp_s;
-      dropped.dropped_nonfinite += f.dropped.dropped_nonfinite;
-      dropped.dropped_zero += f.dropped.dropped_zero;
-      const bool bad = !f.error.empty() || f.missing;
-      if (bad || f.scan.empty()) {
-        if (bad) ++unreadable;
-        else ++empty;
-        skipped.push_back({i, k, bad ? (f.error.empty() ? "missing" : f.error) : "no valid point"});
-        if (to_kitti) continue;
-        f.scan = semlio::Scan();  // --to pcd: a 0-point PCD keeps the numbering
-      }
-      const semlio::Scan& scan = f.scan;
-      points += scan.size();
-      if (!scan.empty() && !scan.has_intensity()) ++no_intensity;
-      if (scan.has_rings()) ++with_rings;
-      if (scan.has_times()) ++with_times;
-      if (to_kitti) {
-        semlio::io::write_kitti_bin((dir / "velodyne" / (frame_name(k) + ".bin")).string(), scan);
-        if (labels) {
-          semlio::io::write_label_file((dir / "labels" / (frame_name(k) + ".label")).string(),
-                                       semlio::io::raw_labels(scan));
-        } else if (scan.has_labels()) {
-          ++labels_lost;
-        }
-      } else {
-        semlio::io::write_pcd((dir / (frame_name(k) + ".pcd")).string(), scan, semlio::io::PcdEncoding::kBinary);
-      }
-      written[k] = true;
-    }
-
-    // A KITTI folder ends at its last .bin: frames after it are dropped.
-    std::size_t n_out = n_sel;
-    if (to_kitti) {
-      while (n_out > 0 && !written[n_out - 1]) --n_out;
-      if (n_out == 0) {
-        throw semlio::FormatError(facts.path + ": no selected frame could be read or holds a valid point; "
-                                               "nothing to write");
-      }
-    }
-    const std::size_t trailing_dropped = n_sel - n_out;
-
-    // Stamps: a frame whose stamp is unknown (a bag that ended early) and
-    // stamps going backwards take the previous stamp (times.txt must not
-    // decrease).
-    std::size_t stamps_clamped = 0;
-    double t_origin = 0.0;
-    bool have_origin = false;
-    for (std::size_t k = 0; k < n_out; ++k) {
-      if (!have_origin && stamp_known[k]) {
-        t_origin = stamps[k];
-        have_origin = true;
-      }
-    }
-    double previous = t_origin;
-    for (std::size_t k = 0; k < n_out; ++k) {
-      if (!stamp_known[k] || stamps[k] < previous) {
-        if (stamp_known[k]) ++stamps_clamped;
-        stamps[k] = previous;
-      }
-      previous = stamps[k];
-    }
-    std::vector<double> times(stamps.begin(), stamps.begin() + static_cast<long>(n_out));
-    // KITTI: seconds since the first frame. t - t0 is exact (Sterbenz) for
-    // stamps within a factor 2 of each other, so frame-to-frame differences
-    // are those of the input bit for bit.
-    if (to_kitti) {
-      for (double& t : times) t -= t_origin;
-    }
-    semlio::io::write_kitti_times((dir / "times.txt").string(), times);
-
-    std::string calib_note = "none written (the input has no camera calibration)";
-    if (to_kitti || input_Tr) {
-      // The input's calib.txt entries as read (P0..P3, Tr, Tr_imu_velo): its
-      // numbers written back exactly, so Tr reads back bit for bit (an SE3
-      // holds a quaternion: writing it as a matrix would move the last digits).
-      semlio::io::Calibration calib;
-      const std::string calib_file = detail::input_calib_file(o, facts.format);
-      if (!calib_file.empty()) calib = semlio::io::read_kitti_calib(calib_file);
-      calib.T_cam0_velo.reset();  // set transforms override the entries as read
-      calib.T_imu_velo.reset();
-      if (calib.entries.count("Tr") == 0) calib.T_cam0_velo = Tr;
-      semlio::io::write_kitti_calib((dir / "calib.txt").string(), calib);
-      calib_note = input_Tr ? "Tr: the input's T_cam0_lidar" : "Tr: identity (the input has no camera calibration)";
-      if (!calib_file.empty()) calib_note += ", entries of " + calib_file;
-    }
-    std::string poses_note = "none (the input has no ground truth)";
-    if (gt) {
-      const fs::path poses_path = dir / "poses.txt";
-      const std::string gt_file = source.ground_truth_source();
-      std::error_code ec;
-      if (to_kitti && fs::is_regular_file(gt_file, ec) && !semlio::io::looks_like_tum(gt_file)) {
-        // A KITTI 3x4 file is stored in the frame poses.txt wants (camera-0
-        // with the input's Tr, else lidar = camera-0 under the identity Tr):
-        // its lines are copied as they are.
-        detail::copy_lines(gt_file, first, n_out, poses_path);
-      } else {
-        std::vector<semlio::SE3d> sel(gt->begin() + static_cast<long>(first),
-                                      gt->begin() + static_cast<long>(first + n_out));
-        if (to_kitti) sel = semlio::io::lidar_to_camera(sel, Tr);
-        semlio::io::write_kitti_poses(poses_path.string(), sel);
-      }
-      poses_note = "ground truth (" + gt_file + "), " +
-                   (to_kitti ? "KITTI camera-0 frame: P_i = Tr T_i Tr^-1" : "lidar frame, KITTI 3x4");
-    }
-
-    // What KITTI .bin cannot carry.
-    std::vector<std::string> lost;
-    if (to_kitti && with_rings > 0) lost.emplace_back("ring");
-    if (to_kitti && with_times > 0) lost.emplace_back("time");
-    if (to_kitti && labels_lost > 0) lost.emplace_back("label");
-    const char* imu_note = "not converted (the KITTI and PCD folder layouts have no generic IMU file)";
-
-    {
-      std::ofstream os(dir / "convert.json");
-      JsonWriter j(os);
-      j.begin_object();
-      j.field("schema", "semlio_convert/1").field("to", o.to);
-      j.key("input").begin_object();
-      j.field("format", facts.format).field("path", facts.path);
-      for (const auto& [key, value] : facts.decided) j.field(key, value);
-      j.field("ground_truth", source.ground_truth_source());
-      j.end_object();
-      j.field("input_frames", n_input).field("first", first).field("last", last);
-      j.field("frames_selected", n_sel).field("frames_out", n_out);
-      j.field("frames_written", static_cast<std::size_t>(std::count(written.begin(), written.end(), true)));
-      j.field("unreadable_frames", unreadable).field("empty_frames", empty);
-      j.field("bad_frames_written_as",
-              to_kitti ? "no .bin: a gap in the numbering (KittiSequence allow_gaps reads it as a missing frame)"
-                       : "a 0-point PCD");
-      j.field("trailing_bad_frames_dropped", trailing_dropped);
-      j.key("skipped").begin_array();
-      for (const detail::SkippedFrame& s : skipped) {
-        j.begin_object();
-        j.field("input_frame", s.input_frame).field("output_frame", s.output_frame).field("reason", s.reason);
-        j.end_object();
-      }
-      j.end_array();
-      j.field("points_written", points);
-      j.key("dropped_points").begin_object();
-      j.field("nonfinite", dropped.dropped_nonfinite).field("zero", dropped.dropped_zero);
-      j.end_object();
-      j.field("labels_written", labels);
-      j.array_field("fields_lost", lost);
-      j.field("frames_with_rings", with_rings).field("frames_with_times", with_times);
-      j.field("frames_without_intensity", no_intensity);
-      j.field("times_txt", to_kitti ? "seconds since the first frame" : "stamps as read [s]");
-      j.field("stamp_origin_s", detail::exact_text(t_origin));
-      j.field("stamps_clamped", stamps_clamped);
-      j.field("calib", calib_note).field("poses", poses_note).field("imu", imu_note);
-      j.end_object();
-      os << '\n';
-      if (!os) throw semlio::IoError((dir / "convert.json").string() + ": write error");
-    }
+    const bool to_kitti = o.to == "kitti";
+    detail::convert_frames(source, last, to_kitti, staged.dir(), t);
+    detail::write_times(to_kitti, staged.dir(), source.facts().path, t);
+    detail::write_calib_and_poses(o, source, to_kitti, staged.dir(), t);
+    detail::write_report(o, source, staged.dir(), t);
     staged.commit();
-
-    // Summary.
-    const std::string out = staged.final_dir().string();
-    std::printf("semlio_convert: %s (%s) -> %s (%s)\n", facts.path.c_str(), facts.format.c_str(), out.c_str(),
-                o.to.c_str());
-    for (const auto& [key, value] : facts.decided) std::printf("  %-18s %s\n", key.c_str(), value.c_str());
-    std::printf("  %-18s %zu of %zu selected (input frames %zu-%zu of %zu)\n", "frames out", n_out, n_sel, first,
-                last, n_input);
-    std::printf("  %-18s %zu unreadable, %zu empty%s\n", "bad frames", unreadable, empty,
-                skipped.empty() ? "" : (to_kitti ? " (gaps: no .bin)" : " (0-point PCDs)"));
-    if (trailing_dropped > 0) std::printf("  %-18s %zu after the last readable frame\n", "frames dropped", trailing_dropped);
-    std::printf("  %-18s %zu written (%zu non-finite and %zu (0,0,0) dropped)\n", "points", points,
-                dropped.dropped_nonfinite, dropped.dropped_zero);
-    std::printf("  %-18s %s\n", "calib", calib_note.c_str());
-    std::printf("  %-18s %s\n", "poses", poses_note.c_str());
-    std::printf("  %-18s %s\n", "imu", imu_note);
-    if (stamps_clamped > 0) std::printf("  %-18s %zu stamps went backwards: set to the previous\n", "stamps", stamps_clamped);
-    if (!lost.empty()) {
-      std::string names;
-      for (const std::string& l : lost) names += (names.empty() ? "" : ", ") + l;
-      std::cerr << "semlio_convert: warning: per-point fields lost (a KITTI .bin holds x y z intensity only): "
-                << names << "; --to pcd keeps them\n";
-    }
-    std::fflush(stdout);
+    detail::print_summary(o, source, staged.final_dir(), t);
     return 0;
   } catch (const semlio::Error& e) {
     std::cerr << "semlio_convert: " << e.what() << "\n";
