@@ -46,7 +46,7 @@ function(same_poses a b)
   file(READ "${WORK_DIR}/${b}/poses.txt" pb)
   string(REGEX MATCHALL "\n" lines "${pa}")
   list(LENGTH lines n)
-  if(NOT n EQUAL 3 OR NOT pa STREQUAL pb)
+  if(n LESS 3 OR NOT pa STREQUAL pb)
     message(FATAL_ERROR "poses.txt of ${a} (${n} lines) and ${b} differ:\n${pa}\nvs\n${pb}")
   endif()
 endfunction()
@@ -143,6 +143,57 @@ foreach(f velodyne/000000.bin velodyne/000002.bin times.txt calib.txt poses.txt)
     message(FATAL_ERROR "KITTI -> KITTI: ${f} differs")
   endif()
 endforeach()
+
+# Every bag fixture (ROS 1 with each compression and unindexed, MCAP with
+# each chunking and encoding, rosbag2 sqlite3; Velodyne, Ouster, Hesai,
+# RoboSense, Livox and big-endian layouts): the PCD folder gives semlio_run
+# the bag's poses.txt byte for byte, and so does the KITTI folder when KITTI
+# .bin loses no field (with ring or time fields it would not: semlio_run
+# infers rings and times that the bag carried). The synthetic clouds are too
+# small to track (identity poses), so for them the real check is that the PCD
+# folder read back and written again gives the same files byte for byte:
+# every field of every scan, and the stamps, survive the round trip.
+foreach(case kitti3_lz4.bag kitti3_zstd.mcap small_lz4.mcap small_unchunked.mcap small_streamed.mcap
+             small_bigendian.mcap small_ros1.mcap small_none.mcap=/padded/points ros2_sqlite=/points
+             quirks_none.bag=/velodyne_points quirks_bz2.bag=/ouster/points quirks_lz4_unindexed.bag=/hesai/pandar
+             quirks_none.bag=/rslidar_points quirks_none.bag=/livox/lidar quirks_none.bag=/bigendian/points)
+  string(REPLACE "=" ";" parts "${case}")
+  list(GET parts 0 file)
+  set(topic)
+  list(LENGTH parts np)
+  if(np EQUAL 2)
+    list(GET parts 1 t)
+    set(topic --lidar-topic ${t})
+  endif()
+  string(MAKE_C_IDENTIFIER "${case}" id)
+  set(in --input "${DATA_DIR}/bags/${file}" ${topic})
+  convert_ok(${case} ${in} --out "${WORK_DIR}/all/k_${id}")
+  convert_ok(${case} ${in} --out "${WORK_DIR}/all/p_${id}" --to pcd)
+  run_ok(${case} ${in} --out "${WORK_DIR}/all/r_${id}" ${common})
+  run_ok(${case} --input "${WORK_DIR}/all/p_${id}" --format folder --out "${WORK_DIR}/all/r_p_${id}" ${common})
+  same_poses(all/r_${id} all/r_p_${id})
+  convert_ok(${case} --input "${WORK_DIR}/all/p_${id}" --format folder --out "${WORK_DIR}/all/pp_${id}" --to pcd)
+  file(GLOB pcds RELATIVE "${WORK_DIR}/all/p_${id}" "${WORK_DIR}/all/p_${id}/*.pcd")
+  list(LENGTH pcds n)
+  if(n LESS 3)
+    message(FATAL_ERROR "${case}: ${n} PCD files")
+  endif()
+  foreach(f ${pcds} times.txt)
+    file(SHA256 "${WORK_DIR}/all/p_${id}/${f}" a)
+    file(SHA256 "${WORK_DIR}/all/pp_${id}/${f}" b)
+    if(NOT a STREQUAL b)
+      message(FATAL_ERROR "${case}: ${f} differs after PCD folder -> PCD folder")
+    endif()
+  endforeach()
+  file(READ "${WORK_DIR}/all/k_${id}/convert.json" report)
+  string(JSON nlost LENGTH "${report}" fields_lost)
+  if(nlost EQUAL 0)
+    run_ok(${case} --input "${WORK_DIR}/all/k_${id}" --format kitti --out "${WORK_DIR}/all/r_k_${id}" ${common})
+    same_poses(all/r_${id} all/r_k_${id})
+    list(APPEND kitti_checked ${case})
+  endif()
+endforeach()
+message(STATUS "KITTI folders compared with their bag (no field lost): ${kitti_checked}")
 
 # 2. Bag -> PCD folder -> semlio_run --format folder.
 convert_ok(pcd --input "${DATA_DIR}/bags/kitti3_lz4.bag" --out "${WORK_DIR}/p_bag" --to pcd)
