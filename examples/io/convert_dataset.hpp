@@ -407,6 +407,7 @@ inline void write_report(const ConvertOptions& o, const FrameSource& source, con
   j.field("nonfinite", t.dropped.dropped_nonfinite).field("zero", t.dropped.dropped_zero);
   j.end_object();
   j.field("labels_written", t.labels);
+  if (t.labels) j.field("labels", "learning classes as their static SemanticKITTI raw ids (labels/NNNNNN.label)");
   j.array_field("fields_lost", t.lost);
   j.field("frames_with_rings", t.with_rings).field("frames_with_times", t.with_times);
   j.field("frames_without_intensity", t.no_intensity);
@@ -430,7 +431,9 @@ inline void print_summary(const ConvertOptions& o, const FrameSource& source, co
               t.first + t.n_sel - 1, t.n_input);
   std::printf("  %-18s %zu unreadable, %zu empty%s\n", "bad frames", t.unreadable, t.empty,
               t.skipped.empty() ? "" : (o.to == "kitti" ? " (gaps: no .bin)" : " (0-point PCDs)"));
-  if (t.n_out < t.n_sel) std::printf("  %-18s %zu after the last readable frame\n", "frames dropped", t.n_sel - t.n_out);
+  if (t.n_out < t.n_sel) {
+    std::printf("  %-18s %zu after the last readable frame\n", "frames dropped", t.n_sel - t.n_out);
+  }
   std::printf("  %-18s %zu written (%zu non-finite and %zu (0,0,0) dropped)\n", "points", t.points,
               t.dropped.dropped_nonfinite, t.dropped.dropped_zero);
   std::printf("  %-18s %s\n", "calib", t.calib_note.c_str());
