@@ -94,3 +94,13 @@ if(SEMLIO_HAVE_BAGS)
                    -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/run_tool_check.cmake")
   set_tests_properties(semlio_run_inputs PROPERTIES LABELS examples TIMEOUT 600)
 endif()
+# semlio_convert's dataset mode: bag, MCAP and KITTI raw drive to KITTI and PCD
+# folders that semlio_run reads back to byte-identical poses; lost fields,
+# bad frames, output guard, bad topic.
+if(SEMLIO_HAVE_BAGS)
+  add_test(NAME semlio_convert_dataset
+           COMMAND ${CMAKE_COMMAND} "-DSEMLIO_RUN=$<TARGET_FILE:semlio_run>" "-DSEMLIO_CONVERT=$<TARGET_FILE:semlio_convert>"
+                   "-DDATA_DIR=${CMAKE_CURRENT_SOURCE_DIR}/data" "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/convert_dataset_check"
+                   -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/convert_dataset_check.cmake")
+  set_tests_properties(semlio_convert_dataset PROPERTIES LABELS examples TIMEOUT 120)
+endif()

@@ -4,6 +4,14 @@
 //
 //   semlio_convert IN OUT [--labels IN.label] [--ascii]
 //
+// Dataset mode (the first argument is an option): every frame of any input
+// semlio_run reads into a KITTI-layout folder or a folder of PCDs
+// (convert_dataset.hpp):
+//
+//   semlio_convert --input PATH --out DIR [--format F] [--lidar-topic T]
+//                  [--imu-topic T] [--gt FILE] [--calib FILE] [--to kitti|pcd]
+//                  [--first N] [--last N] [--overwrite]
+//
 // Exit 1 with a message naming the file for unreadable or invalid input, and
 // for a scan with no valid point (all NaN/Inf or (0,0,0)) written as .bin:
 // a KITTI .bin cannot hold an empty scan, so nothing is written. To .pcd and
@@ -20,6 +28,8 @@
 #include <semlio/io/pcd.hpp>
 #include <semlio/io/ply.hpp>
 
+#include "convert_dataset.hpp"
+
 namespace {
 
 std::string extension(const std::string& path) {
@@ -30,13 +40,15 @@ std::string extension(const std::string& path) {
 
 int usage() {
   std::cerr << "usage: semlio_convert IN OUT [--labels IN.label] [--ascii]\n"
-               "  formats by extension: .bin (KITTI), .pcd, .ply\n";
+               "  formats by extension: .bin (KITTI), .pcd, .ply\n"
+               "   or: semlio_convert --input PATH --out DIR [--to kitti|pcd] ... (a whole dataset; --help)\n";
   return 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && std::strncmp(argv[1], "--", 2) == 0) return semlio_examples::convert_dataset_main(argc, argv);
   if (argc < 3) return usage();
   const std::string in = argv[1];
   const std::string out = argv[2];
