@@ -164,7 +164,7 @@ struct ImuRunFacts {
 };
 
 // Counts one LIO frame into the facts (frame index relative to --first).
-void count_lio_frame(ImuRunFacts& f, const semlio::LidarInertialReport& r, std::size_t frame) {
+inline void count_lio_frame(ImuRunFacts& f, const semlio::LidarInertialReport& r, std::size_t frame) {
   if (r.initialized && f.initialized_at < 0) f.initialized_at = static_cast<long>(frame);
   f.imu_predicted += r.prediction == semlio::PredictionSource::kImu ? 1U : 0U;
   f.fallbacks += r.imu_fallback ? 1U : 0U;
@@ -306,7 +306,7 @@ class FrameReader {
 
 // CPU time of the calling thread [ms]: unlike wall time it does not grow
 // when other processes share the machine, so long runs stay comparable.
-double thread_cpu_ms() {
+inline double thread_cpu_ms() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
@@ -314,7 +314,7 @@ double thread_cpu_ms() {
 
 // Peak (VmHWM) or current (VmRSS) resident set size [kB] from
 // /proc/self/status; 0 when unknown.
-long status_kb(const char* field) {
+inline long status_kb(const char* field) {
   std::ifstream status("/proc/self/status");
   std::string key;
   while (status >> key) {
@@ -327,10 +327,10 @@ long status_kb(const char* field) {
   }
   return 0;
 }
-long peak_rss_kb() { return status_kb("VmHWM:"); }
+inline long peak_rss_kb() { return status_kb("VmHWM:"); }
 // Bytes the allocator has handed out and not got back (live heap + mmapped
 // blocks): tells live growth from fragmentation in the resident set.
-std::size_t heap_live_bytes() {
+inline std::size_t heap_live_bytes() {
 #if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
   const struct mallinfo2 mi = mallinfo2();
   return mi.uordblks + mi.hblkhd;
@@ -338,11 +338,11 @@ std::size_t heap_live_bytes() {
   return 0;
 #endif
 }
-long rss_kb() { return status_kb("VmRSS:"); }
+inline long rss_kb() { return status_kb("VmRSS:"); }
 constexpr std::size_t kMemoryTraceEvery = 250;
 
 // Terminal progress line (frame i/N, Hz, ETA), refreshed every 5 frames.
-void show_progress(const char* tool, std::size_t done, std::size_t n, std::chrono::steady_clock::time_point start) {
+inline void show_progress(const char* tool, std::size_t done, std::size_t n, std::chrono::steady_clock::time_point start) {
   if (done % 5 != 0 && done != n) return;
   const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double hz = static_cast<double>(done) / std::max(el, 1e-9);
@@ -350,7 +350,7 @@ void show_progress(const char* tool, std::size_t done, std::size_t n, std::chron
                static_cast<double>(n - done) / hz);
 }
 
-double percentile(std::vector<double> v, double q) {
+inline double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
   const double pos = q * static_cast<double>(v.size() - 1);
@@ -362,7 +362,7 @@ double percentile(std::vector<double> v, double q) {
 // Front end + back end (Slam). With a lidar-inertial front end (--imu oxts
 // --loop on), `imu` feeds it before each scan.
 template <typename Odometry>
-RunResult run(Odometry odom, const BackEndSettings& be, bool write_map,
+inline RunResult run(Odometry odom, const BackEndSettings& be, bool write_map,
               const FrameReader& frames, std::size_t first, std::size_t last, bool quiet, const Checkpoint& checkpoint,
               [[maybe_unused]] ImuFeed* imu = nullptr) {
   RunResult result;
@@ -441,7 +441,7 @@ RunResult run(Odometry odom, const BackEndSettings& be, bool write_map,
 // pushed up to each sweep's end. poses: the LIO's (inertial graph);
 // odometry: the front end's scan-to-map poses. No back end, no map.
 template <typename Make>
-RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::vector<semlio::ImuSample>& imu,
+inline RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::vector<semlio::ImuSample>& imu,
                   const std::vector<OxtsVelocity>& velocities, const FrameReader& frames,
                   std::size_t first, std::size_t last, bool quiet, const Checkpoint& checkpoint) {
   RunResult result;
@@ -482,7 +482,7 @@ RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::v
   return result;
 }
 
-void write_timings(JsonWriter& j, const semlio::StageTimings& t) {
+inline void write_timings(JsonWriter& j, const semlio::StageTimings& t) {
   j.key("timings_ms").begin_object();
   j.field("preprocess", t.preprocess_ms).field("segment", t.segment_ms).field("features", t.features_ms);
   j.field("solve", t.solve_ms).field("scan_shapes", t.scan_shapes_ms).field("associate", t.associate_ms);
@@ -531,7 +531,7 @@ inline void prepare_output_dir(const std::string& out, bool overwrite) {
 /// Writes a file through `write(temporary_path)` and renames it to `path`
 /// when complete, so that OUT never holds a truncated output.
 template <typename Write>
-void write_atomically(const fs::path& path, Write&& write) {
+inline void write_atomically(const fs::path& path, Write&& write) {
   const fs::path tmp = path.parent_path() / ("." + path.filename().string() + ".partial");
   write(tmp.string());
   std::error_code ec;
@@ -944,8 +944,15 @@ using SettingsHook = std::function<void(FrameSource&, RunContext&)>;
 /// validated before the first frame; the odometry; the outputs. Returns the
 /// process exit status (0, 1 on an error, 2 on a usage error, 130 when
 /// interrupted). Errors are printed with the tool's name.
-inline int run_tool(const char* tool, const RunOptions& opt, const std::function<std::unique_ptr<FrameSource>()>& open,
-                    const SettingsHook& sensor_settings = {}) {
+int run_tool(const char* tool, const RunOptions& opt, const std::function<std::unique_ptr<FrameSource>()>& open,
+             const SettingsHook& sensor_settings = {});
+
+#if defined(SEMLIO_RUN_TOOL_DEFINITION)
+// Defined in one translation unit, odometry_tool.cpp, which semlio_run and
+// semlio_kitti both link: the odometry's instantiations are the longest
+// compile of the tools, and this way it runs once.
+int run_tool(const char* tool, const RunOptions& opt, const std::function<std::unique_ptr<FrameSource>()>& open,
+             const SettingsHook& sensor_settings) {
   if (opt.last < -1) {
     std::cerr << tool << ": --last " << opt.last << " is not a frame (use -1 for the last frame)\n";
     return 2;
@@ -1106,5 +1113,7 @@ inline int run_tool(const char* tool, const RunOptions& opt, const std::function
     return 1;
   }
 }
+
+#endif  // SEMLIO_RUN_TOOL_DEFINITION
 
 }  // namespace semlio_examples
