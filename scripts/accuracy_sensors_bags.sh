@@ -46,11 +46,11 @@ for sensor in $SENSORS; do
     name=${input//./_}
     extra=()
     [ "$input" != drive ] && extra=(--gt "$dir/drive/poses.txt" --calib "$dir/drive/calib.txt")
-    if ! "$RUN" --input "$dir/$input" --out "$dir/run_$name" --overwrite --sensor auto --kitti-correction off \
-        --preset "$PRESET" --labels "$LABELS" --map off --quiet "${extra[@]}" > "$dir/run_$name.log" 2>&1; then
-      echo "run failed: $dir/run_$name.log"; tail -3 "$dir/run_$name.log"; status=1; continue
+    if ! "$RUN" --input "$dir/$input" --out "$dir/run_${PRESET}_$name" --overwrite --sensor auto --kitti-correction off \
+        --preset "$PRESET" --labels "$LABELS" --map off --quiet "${extra[@]}" > "$dir/run_${PRESET}_$name.log" 2>&1; then
+      echo "run failed: $dir/run_${PRESET}_$name.log"; tail -3 "$dir/run_${PRESET}_$name.log"; status=1; continue
     fi
-    row=$(/usr/bin/python3 - "$dir/run_$name/report.json" "$sensor" "$input" "$bound" <<'PY'
+    row=$(/usr/bin/python3 - "$dir/run_${PRESET}_$name/report.json" "$sensor" "$input" "$bound" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 k = r["evaluation"]["kitti"]
