@@ -120,12 +120,27 @@ class BagSource final : public FrameSource {
     try {
       decode_cloud(message_, cloud_);
       semlio::io::pointcloud2_to_scan(cloud_, f.scan, cloud_config_, nullptr, &f.dropped);
+      if (!f.scan.has_times()) f.scan.stamp_s -= header_after_start_s_;
     } catch (const semlio::Error& e) {
       f.error = e.what();
       f.scan = semlio::Scan();
       f.scan.stamp_s = static_cast<double>(message_.log_time_ns) / 1e9;
     }
     return f;
+  }
+
+  void set_header_stamp(semlio::StampMeaning meaning, double sweep_period_s) override {
+    const double f = meaning == semlio::StampMeaning::kSweepEnd      ? 1.0
+                     : meaning == semlio::StampMeaning::kSweepMiddle ? 0.5
+                                                                      : 0.0;
+    header_after_start_s_ = f * sweep_period_s;
+    if (first_scan_.has_times()) {
+      facts_.decided.emplace_back("stamps", "per-point time field: a sweep starts at its earliest point");
+    } else {
+      facts_.decided.emplace_back("stamps", std::string("header stamp = sweep ") + semlio::to_string(meaning) +
+                                                ": sweep start = header stamp - " +
+                                                std::to_string(header_after_start_s_) + " s");
+    }
   }
 
   [[nodiscard]] std::optional<std::vector<semlio::SE3d>> ground_truth_lidar() const override {
@@ -243,6 +258,7 @@ class BagSource final : public FrameSource {
   semlio::io::PointCloud2Layout layout_;
   semlio::io::PointCloud2Config cloud_config_;
   semlio::Scan first_scan_;
+  double header_after_start_s_ = 0.0;  // header stamp minus sweep start [s] (set_header_stamp)
 };
 
 /// The bag source for `format` (bag, mcap, db3).

@@ -18,6 +18,7 @@
 
 #include <semlio/core/error.hpp>
 #include <semlio/core/scan.hpp>
+#include <semlio/features/sensor_profiles.hpp>
 #include <semlio/imu/imu_sample.hpp>
 #include <semlio/io/kitti_sequence.hpp>
 #include <semlio/io/oxts.hpp>
@@ -70,6 +71,12 @@ class FrameSource {
   [[nodiscard]] virtual std::vector<semlio::Scan> first_scans(std::size_t k) = 0;
   /// Stamp of frame i [s] when known before reading it (files with times.txt), else nullopt.
   [[nodiscard]] virtual std::optional<double> stamp_hint(std::size_t /*i*/) const { return std::nullopt; }
+  /// What a message's header stamp means (the sensor profile's driver
+  /// convention) and the sweep period [s]: a source whose stamps are header
+  /// stamps moves a scan without per-point times to its sweep start
+  /// (Scan::stamp_s); a scan with them starts at its earliest point anyway.
+  /// Called once, before the first read(). Other sources ignore it.
+  virtual void set_header_stamp(semlio::StampMeaning /*meaning*/, double /*sweep_period_s*/) {}
   /// True when frames carry per-point labels (SemanticKITTI labels/ folder).
   [[nodiscard]] virtual bool has_labels() const { return false; }
   /// Ground truth as lidar poses, one per frame (frame 0 need not be identity);

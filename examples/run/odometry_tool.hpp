@@ -560,6 +560,7 @@ struct RunContext {
   std::string imu_source;
   std::vector<std::pair<std::string, std::string>> sensor_facts;  // summary + report.json "sensor"
   std::optional<SE3d> T_imu_lidar;  // lidar -> IMU extrinsic given beside the data (sensor YAML), else the input's
+  semlio::GeometricSegmenterConfig segmenter;  // --labels geometric; its sensor height follows the sensor profile
 };
 
 /// One pose per frame done: skipped frames interpolated by stamp, deskewed
@@ -1100,7 +1101,7 @@ int run_tool(const char* tool, const RunOptions& opt, const std::function<std::u
                  : run(semlio::make_full_odometry(segmenter, settings), back_end, ctx.write_map, frames, first, last_u,
                        opt.quiet, checkpoint);
     };
-    result = run_preset(SegmenterChoice(geometric          ? SegmenterChoice::Variant(semlio::GeometricSegmenter{})
+    result = run_preset(SegmenterChoice(geometric          ? SegmenterChoice::Variant(semlio::GeometricSegmenter(ctx.segmenter))
                                         : ctx.use_labels ? SegmenterChoice::Variant(semlio::ScanLabels{})
                                                          : SegmenterChoice::Variant(semlio::NoLabels{})));
     write_outputs(ctx, result, result.interrupted ? "interrupted" : "complete", true);

@@ -27,6 +27,15 @@ bool is_yaml_file(const std::string& s) {
   return ends(".yaml") || ends(".yml");
 }
 
+// What else follows the profile besides PipelineSettings: the meaning of the
+// input's header stamps and the ground segmenter's sensor height.
+void apply_profile(const semlio::SensorProfile& profile, semlio_examples::FrameSource& source,
+                   semlio_examples::RunContext& ctx) {
+  source.set_header_stamp(profile.header_stamp, profile.sweep_period_s());
+  ctx.segmenter.sensor_height_m = profile.mount_height_m;
+  ctx.sensor_facts.emplace_back("mount_height_m", std::to_string(profile.mount_height_m));
+}
+
 // The sensor of a run (--sensor, --platform): a named profile, a sensor YAML,
 // or auto -- KITTI scans keep the HDL-64E point-order rings; any other input
 // gets the beam table detected from its first scans (from the cloud's ring
@@ -62,6 +71,7 @@ void decide_sensor(const std::string& sensor, const std::string& platform, semli
     ctx.settings = semlio::settings_for_sensor(profile, y.motion, ctx.settings);
     ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, &d);
     ctx.sensor_facts.emplace_back("decided_by", "auto: beams detected from the first scans");
+    apply_profile(profile, source, ctx);
     return;
   } else {
     y.sensor = semlio::sensor_profile(sensor);
@@ -79,6 +89,7 @@ void decide_sensor(const std::string& sensor, const std::string& platform, semli
   ctx.settings.odometry.kitti_vertical_correction = kitti_correction;
   ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, detection ? &*detection : nullptr);
   ctx.sensor_facts.emplace_back("decided_by", "--sensor " + sensor);
+  apply_profile(profile, source, ctx);
   if (y.T_imu_lidar) ctx.T_imu_lidar = y.T_imu_lidar;
   y.apply_imu(ctx.lc.imu);
 }

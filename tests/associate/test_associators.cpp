@@ -422,6 +422,16 @@ TEST_CASE("Normal consistency skips a nearer candidate on the wrong plane", "[as
   Correspondences rc;
   ref.associate(SE3d(), rc);
   CHECK(first_difference(nc, rc) == nc.size());
+
+  // With the axis test off (a frame with no motion estimate: odometry.hpp)
+  // the nearest candidates are kept, wall point first: NearestK's matches.
+  CHECK(fast.axis_test());
+  CHECK(fast.set_axis_test(false));
+  fast.associate(SE3d(), nc);
+  CHECK(first_difference(nc, nk) == nc.size());
+  CHECK_FALSE(fast.set_axis_test(true));
+  fast.associate(SE3d(), nc);
+  CHECK(nc[0].index[0] == want_index[0]);
 }
 
 TEST_CASE("NearestK keeps the gated nearest points in distance order", "[associate]") {

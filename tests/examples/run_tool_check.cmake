@@ -8,7 +8,8 @@
 #  4. an OUT that cannot be created fails before the first frame;
 #  5. --last -5 is a usage error; 6. a deleted scan is one "missing" frame;
 #  7. the KITTI raw drive as published runs and is evaluated against OXTS;
-#  8. a bag with several PointCloud2 topics names them.
+#  8. a bag with several PointCloud2 topics names them;
+#  9. header stamps mean what the sensor profile says (sweep end or start).
 # Variables: SEMLIO_RUN, SEMLIO_CONVERT (binaries), DATA_DIR (tests/data), WORK_DIR.
 cmake_minimum_required(VERSION 3.21)  # policies: quoted strings in if() are never variables
 file(REMOVE_RECURSE "${WORK_DIR}")
@@ -158,3 +159,32 @@ if(NOT rc EQUAL 1 OR NOT err MATCHES "/velodyne_points" OR NOT err MATCHES "/ous
 endif()
 run_ok(quirks_topic --input "${DATA_DIR}/bags/quirks_none.bag" --lidar-topic /ouster/points --imu-topic /imu/data
        --out "${WORK_DIR}/quirks_ouster" --labels none --map off --quiet)
+
+# 9. What a header stamp means follows the sensor profile: the Velodyne
+#    driver stamps a cloud at the sweep's end (hdl64e), Ouster's at its start
+#    (os1-64); the KITTI folder's times.txt holds the same stamps as sweep
+#    starts. Clouds without per-point times start 0.1 s before their stamp
+#    under hdl64e and at it under os1-64.
+function(first_tum_stamp dir var)
+  file(STRINGS "${dir}/poses_tum.txt" lines LIMIT_COUNT 1)
+  string(REGEX MATCH "^[0-9.]+" s "${lines}")
+  set(${var} "${s}" PARENT_SCOPE)
+endfunction()
+run_ok(stamp_os --input "${DATA_DIR}/bags/kitti3_lz4.bag" --out "${WORK_DIR}/stamp_os" --labels none --sensor os1-64
+       --map off --quiet)
+first_tum_stamp("${WORK_DIR}/out_bag" stamp_velodyne)
+first_tum_stamp("${WORK_DIR}/stamp_os" stamp_ouster)
+first_tum_stamp("${WORK_DIR}/out_kitti" stamp_times)
+file(READ "${WORK_DIR}/out_bag/report.json" report)
+string(JSON how GET "${report}" input stamps)
+# The ground segmenter's sensor height follows the profile too (Ouster: 1 m).
+file(READ "${WORK_DIR}/stamp_os/report.json" report_os)
+string(JSON height GET "${report_os}" sensor mount_height_m)
+if(NOT height MATCHES "^1\\.0+$")
+  message(FATAL_ERROR "os1-64: sensor.mount_height_m ${height}, expected the profile's 1 m")
+endif()
+if(NOT stamp_velodyne MATCHES "^1317357624\\.9" OR NOT stamp_ouster MATCHES "^1317357625\\.0"
+   OR NOT stamp_times STREQUAL stamp_ouster OR NOT how MATCHES "sweep end")
+  message(FATAL_ERROR "header stamps: hdl64e ${stamp_velodyne}, os1-64 ${stamp_ouster}, times.txt ${stamp_times} "
+                      "(expected 1317357624.9..., 1317357625.0... twice); report: ${how}")
+endif()

@@ -138,6 +138,18 @@ class NormalConsistency {
     return std::min<std::size_t>(k + 5, static_cast<std::size_t>(kMaxCandidateList));
   }
 
+  /// Switches the axis test (lines 7-10) off or on: off, a feature keeps
+  /// its first `keep` candidates inside the gate in distance order, as
+  /// NearestK would. The odometry turns it off for a frame with no motion
+  /// estimate (pipeline/odometry.hpp). Returns the previous setting.
+  bool set_axis_test(bool on) noexcept {
+    const bool was = axis_test_;
+    axis_test_ = on;
+    return was;
+  }
+  /// True while the axis test is on (the default).
+  [[nodiscard]] bool axis_test() const noexcept { return axis_test_; }
+
   /// Scan-frame axis of each bound feature (zero = unusable), for inspection.
   [[nodiscard]] const std::vector<Eigen::Vector3f>& scan_axes() const noexcept { return scan_axes_; }
   /// The settings.
@@ -166,7 +178,7 @@ class NormalConsistency {
                             NearestCache* cache, FeatureMap::AxisHint& hint) const {
     FeatureMatches m;
     const Eigen::Vector3f& axis = scan_axes_[i];
-    if (axis.isZero()) return m;  // unusable scan axis: every candidate would fail
+    if (axis.isZero() && axis_test_) return m;  // unusable scan axis: every candidate would fail
     const Eigen::Vector3f q = detail::feature_to_map(R, t, (*features_)[i]);
     const Eigen::Vector3d n1 = R * axis.cast<double>();
     const double gate2 = config_.max_distance_m * config_.max_distance_m;
@@ -180,7 +192,7 @@ class NormalConsistency {
                                            : map_->nearest(q, k, gate2, idx.data(), d2.data());
     // Lines 4-10 with both axes cached: keep agreeing candidates until 5 are kept.
     for (std::size_t j = 0; j < n; ++j) {
-      if (detail::axes_agree(n1, map_->axis(idx[j], hint), cos_max_)) {
+      if (!axis_test_ || detail::axes_agree(n1, map_->axis(idx[j], hint), cos_max_)) {
         detail::push_match(m, idx[j], j + 1);
         if (m.count == keep) return m;
       }
@@ -199,6 +211,7 @@ class NormalConsistency {
 
   Config config_;
   double cos_max_;
+  bool axis_test_ = true;  // set_axis_test()
   const FeatureMap* map_ = nullptr;
   const std::vector<Eigen::Vector3f>* features_ = nullptr;
   SmallKdTree3f scan_tree_;  // rebuilt per frame without allocating; equal results to KdTree3f

@@ -137,6 +137,15 @@ class ScanToMapProblem {
     return widened;
   }
 
+  /// Switches the associators' axis test (NormalConsistency::set_axis_test)
+  /// off or on; associators without one (NearestK) ignore it.
+  void set_axis_test(bool on) {
+    if constexpr (requires { corner_assoc_.set_axis_test(on); }) {
+      corner_assoc_.set_axis_test(on);
+      surface_assoc_.set_axis_test(on);
+    }
+  }
+
   /// Correspondences of the last association, per corner feature.
   [[nodiscard]] const Correspondences& corner_matches() const noexcept { return corner_matches_; }
   /// Correspondences of the last association, per surface feature.
