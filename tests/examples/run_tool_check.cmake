@@ -183,8 +183,8 @@ string(JSON height GET "${report_os}" sensor mount_height_m)
 if(NOT height MATCHES "^1\\.0+$")
   message(FATAL_ERROR "os1-64: sensor.mount_height_m ${height}, expected the profile's 1 m")
 endif()
-if(NOT stamp_velodyne MATCHES "^1317357624\\.9" OR NOT stamp_ouster MATCHES "^1317357625\\.0"
+if(NOT stamp_velodyne MATCHES "^1317357624\\.9" OR NOT stamp_ouster MATCHES "^1317357625(\\.0+)?$"
    OR NOT stamp_times STREQUAL stamp_ouster OR NOT how MATCHES "sweep end")
   message(FATAL_ERROR "header stamps: hdl64e ${stamp_velodyne}, os1-64 ${stamp_ouster}, times.txt ${stamp_times} "
-                      "(expected 1317357624.9..., 1317357625.0... twice); report: ${how}")
+                      "(expected 1317357624.9 and 1317357625 twice); report: ${how}")
 endif()
