@@ -62,6 +62,15 @@ struct OdometryConfig {
   /// predicts the next better (median error 6.0 deg, max 28 deg) than all of
   /// it (8.2 deg, 36 deg) or none (7.6 deg, 29 deg).
   double prediction_rotation_scale = 1.0;
+  /// Solve every frame twice: first with the nearest candidates (the
+  /// associator's axis test off, NormalConsistency::set_axis_test), then
+  /// from that pose with the test on. Algorithm 1 compares the feature's
+  /// axis, rotated by the current estimate, with the map's at 10 deg; a
+  /// start off by more than that rejects the true matches. Hand-held
+  /// predictions are (BALM OS0: median 6 deg, max 28 deg off, see
+  /// prediction_rotation_scale), so the hand-held profile turns this on
+  /// (presets.hpp). Associators without an axis test solve once.
+  bool coarse_solve_first = false;
 };
 
 /// What happened to a frame.
@@ -285,8 +294,16 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     // its nearest candidates instead (NormalConsistency::set_axis_test).
     const bool no_motion_estimate = !has_prior && processed_ < 2;
     problem_.set_min_robust_scale_m(no_motion_estimate ? std::numeric_limits<double>::infinity() : 0.0);
-    problem_.set_axis_test(!no_motion_estimate);
+    const bool coarse = no_motion_estimate || config_.coarse_solve_first;
+    const bool has_axis_test = problem_.set_axis_test(!coarse);
     report.solve = gauss_newton(problem_, T, solver);
+    if (coarse && !no_motion_estimate && has_axis_test && report.solve.ok()) {
+      // The fine solve: Algorithm 1 from the coarse answer.
+      const int coarse_iterations = report.solve.iterations;
+      problem_.set_axis_test(true);
+      report.solve = gauss_newton(problem_, T, solver);
+      report.solve.iterations += coarse_iterations;
+    }
     problem_.set_min_robust_scale_m(0.0);
     problem_.set_axis_test(true);
     const auto [cm, sm] = problem_.matched_counts();

@@ -82,6 +82,7 @@ struct MotionProfile {
   double prediction_rotation_scale = 1.0; ///< OdometryConfig::prediction_rotation_scale
   bool crop_ego_box = true;               ///< PreprocessConfig::crop_ego_box
   int min_solver_iterations = 0;          ///< GaussNewtonConfig::max_iterations at least this
+  bool coarse_solve_first = false;        ///< OdometryConfig::coarse_solve_first
 };
 
 /// A car (KITTI): the fixed gates of OdometryConfig (2 m, 0.3 rad per frame
@@ -95,14 +96,20 @@ inline MotionProfile vehicle_motion() { return MotionProfile{}; }
 /// at 2 Hz frames the rotation gate opens to 2 rad; half the last rotation
 /// extrapolated (OdometryConfig::prediction_rotation_scale); no vehicle box;
 /// at least 50 Gauss-Newton iterations, since corrections of tens of degrees
-/// take more than 30 (BALM OS0: one keyframe stopped 11 cm / 2 deg off at 30).
+/// take more than 30 (BALM OS0: one keyframe stopped 11 cm / 2 deg off at 30);
+/// and for the same corrections a coarse solve with the nearest candidates
+/// before Algorithm 1's (OdometryConfig::coarse_solve_first: the full
+/// preset's ATE on the BALM OS0 keyframes, scripts/balm_os0.sh, was 0.66 m
+/// without it, three keyframes 17-22 deg off where the prediction missed by
+/// about 20 deg).
 inline MotionProfile hand_held_motion() {
   return MotionProfile{.name = "hand_held",
                        .max_speed_mps = 2.0,
                        .max_angular_rate_radps = 2.0,
                        .prediction_rotation_scale = 0.5,
                        .crop_ego_box = false,
-                       .min_solver_iterations = 50};
+                       .min_solver_iterations = 50,
+                       .coarse_solve_first = true};
 }
 
 /// The motion profile named `name` ("vehicle", "hand_held"); throws
@@ -145,6 +152,7 @@ inline PipelineSettings settings_for_sensor(const SensorProfile& sensor, const M
   o.max_angular_rate_radps = motion.max_angular_rate_radps;
   o.prediction_rotation_scale = motion.prediction_rotation_scale;
   o.solver.max_iterations = std::max(o.solver.max_iterations, motion.min_solver_iterations);
+  o.coarse_solve_first = motion.coarse_solve_first;
   base.deskew.sweep_period_s = sensor.sweep_period_s();
   base.deskew.start_azimuth_rad = sensor.sweep_start_azimuth_rad;
   base.deskew.clockwise = !sensor.counter_clockwise;

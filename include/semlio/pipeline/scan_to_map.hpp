@@ -138,11 +138,15 @@ class ScanToMapProblem {
   }
 
   /// Switches the associators' axis test (NormalConsistency::set_axis_test)
-  /// off or on; associators without one (NearestK) ignore it.
-  void set_axis_test(bool on) {
+  /// off or on; associators without one (NearestK) ignore it. Returns
+  /// whether they have one.
+  bool set_axis_test(bool on) {
     if constexpr (requires { corner_assoc_.set_axis_test(on); }) {
       corner_assoc_.set_axis_test(on);
       surface_assoc_.set_axis_test(on);
+      return true;
+    } else {
+      return false;
     }
   }
 
