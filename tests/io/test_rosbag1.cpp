@@ -18,6 +18,8 @@
 #include <utility>
 #include <vector>
 
+#include <lz4frame.h>
+
 #include <semlio/io/bag/ros_writer_msgs.hpp>
 #include <semlio/io/bag/rosbag1.hpp>
 #include <semlio/io/bag/rosbag1_writer.hpp>
@@ -395,6 +397,45 @@ TEST_CASE("rosbag1: missing, foreign and hand-damaged files give typed errors", 
     std::memcpy(b.data() + at + 5, &lie, 4);
     CHECK_THROWS_AS(RosBag1Reader(dir.write("b.bag", b)), semlio::FormatError);
   }
+}
+
+TEST_CASE("rosbag1: XXH32 of known strings and of liblz4's frames; a wrong LZ4 content checksum is a FormatError",
+          "[io][rosbag1]") {
+  using semlio::io::detail::xxh32;
+  const auto h = [](const std::string& s) { return xxh32(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()); };
+  CHECK(h("") == 0x02CC5D05U);
+  CHECK(h("a") == 0x550D7456U);
+  CHECK(h("abc") == 0x32D153FFU);
+  CHECK(h("Nobody inspects the spammish repetition") == 0xE2293B2FU);
+  // liblz4 writes XXH32 of the content as the frame's last 4 bytes: every
+  // tail length after the 16-byte stripes, and a multi-block frame.
+  std::mt19937 rng(5);
+  LZ4F_preferences_t prefs{};
+  prefs.frameInfo.contentChecksumFlag = LZ4F_contentChecksumEnabled;
+  prefs.frameInfo.blockSizeID = LZ4F_max64KB;
+  int mismatches = 0;
+  std::vector<std::uint8_t> out;
+  for (const std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{15}, std::size_t{16}, std::size_t{17},
+                              std::size_t{31}, std::size_t{100}, std::size_t{65536 * 3 + 5}}) {
+    std::vector<std::uint8_t> data(n);
+    for (std::uint8_t& v : data) v = static_cast<std::uint8_t>(rng() % 7);  // compressible
+    std::vector<std::uint8_t> frame(LZ4F_compressFrameBound(n, &prefs));
+    const std::size_t size = LZ4F_compressFrame(frame.data(), frame.size(), data.data(), n, &prefs);
+    REQUIRE(LZ4F_isError(size) == 0U);
+    frame.resize(size);
+    std::uint32_t stated = 0;
+    std::memcpy(&stated, frame.data() + size - 4, 4);
+    mismatches += xxh32(data.data(), n) != stated;
+    semlio::io::detail::decompress_lz4_frame(frame.data(), frame.size(), n, out, "test");
+    mismatches += out != data;
+    if (n > 0) {
+      std::vector<std::uint8_t> bad = frame;
+      bad[size - 1] ^= 0x01U;  // the stored checksum
+      CHECK_THROWS_WITH(semlio::io::detail::decompress_lz4_frame(bad.data(), bad.size(), n, out, "test"),
+                        Catch::Contains("checksum"));
+    }
+  }
+  CHECK(mismatches == 0);
 }
 
 TEST_CASE("rosbag1: truncated and randomly damaged copies fail with semlio errors only", "[io][rosbag1]") {
