@@ -41,7 +41,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -53,12 +52,9 @@
 #include <semlio/io/trajectory.hpp>
 #include <semlio/lie/se3.hpp>
 
-#include "file_sources.hpp"
 #include "frame_source.hpp"
 #include "json_writer.hpp"
-#if defined(SEMLIO_HAVE_BAGS)
-#include "bag_source.hpp"
-#endif
+#include "open_source.hpp"
 
 namespace semlio_examples {
 
@@ -77,33 +73,15 @@ struct ConvertOptions {
   bool overwrite = false;
 };
 
-/// Opens `o.input` as semlio_run does (same formats, detection, topics,
-/// --gt, --calib). Throws what the sources throw.
+/// Opens `o.input` as semlio_run does (open_source: same formats, detection,
+/// topics, --gt, --calib; KITTI labels/ when present). Throws what the sources throw.
 inline std::unique_ptr<FrameSource> open_convert_source(const ConvertOptions& o) {
-  std::string format = o.format;
-  std::string why = "--format";
-  if (format == "auto") std::tie(format, why) = detect_format(o.input);
-  std::unique_ptr<FrameSource> source;
-  if (format == "kitti") {
-    SourceConfig sc;
-    sc.ground_truth_path = o.gt;
-    sc.calib_path = o.calib;
-    sc.allow_missing_frames = true;
-    source = std::make_unique<KittiFolderSource>(o.input, sc);
-  } else if (format == "kitti-raw") {
-    source = std::make_unique<KittiRawSource>(o.input, o.calib);
-  } else if (format == "folder") {
-    source = std::make_unique<ScanFolderSource>(o.input, o.gt);
-  } else {
-#if defined(SEMLIO_HAVE_BAGS)
-    source = open_bag_source(o.input, format, o.lidar_topic, o.imu_topic, o.gt, o.calib);
-#else
-    throw semlio::ConfigError(o.input + ": this build has no bag readers (install libbz2-dev liblz4-dev "
-                              "libzstd-dev libsqlite3-dev and reconfigure)");
-#endif
-  }
-  source->add_fact_front("format_decided_by", why);
-  return source;
+  return open_source(InputSpec{.input = o.input,
+                               .format = o.format,
+                               .lidar_topic = o.lidar_topic,
+                               .imu_topic = o.imu_topic,
+                               .gt = o.gt,
+                               .calib = o.calib});
 }
 
 namespace detail {

@@ -9,13 +9,10 @@
 #include <memory>
 #include <string>
 
-#include "file_sources.hpp"
 #include "frame_source.hpp"
 #include "odometry_tool.hpp"
+#include "open_source.hpp"
 #include "sensor_yaml.hpp"
-#if defined(SEMLIO_HAVE_BAGS)
-#include "bag_source.hpp"
-#endif
 
 namespace {
 
@@ -139,31 +136,16 @@ int main(int argc, char** argv) {
     return app.exit(e) == 0 ? 0 : 2;
   }
   return semlio_examples::run_tool("semlio_run", opt, [&]() -> std::unique_ptr<semlio_examples::FrameSource> {
-    std::string format = in.format;
-    std::string why = "--format";
-    if (format == "auto") std::tie(format, why) = semlio_examples::detect_format(in.input);
-    std::unique_ptr<semlio_examples::FrameSource> source;
-    if (format == "kitti") {
-      semlio_examples::SourceConfig sc;
-      sc.labels = (opt.labels == "none" || opt.labels == "geometric") ? "" : opt.labels;
-      sc.ground_truth_path = in.gt;
-      sc.calib_path = in.calib;
-      sc.allow_missing_frames = opt.missing_frames == "empty";
-      source = std::make_unique<semlio_examples::KittiFolderSource>(in.input, sc);
-    } else if (format == "kitti-raw") {
-      source = std::make_unique<semlio_examples::KittiRawSource>(in.input, in.calib);
-    } else if (format == "folder") {
-      source = std::make_unique<semlio_examples::ScanFolderSource>(in.input, in.gt);
-    } else {
-#if defined(SEMLIO_HAVE_BAGS)
-      source = semlio_examples::open_bag_source(in.input, format, in.lidar_topic, in.imu_topic, in.gt, in.calib);
-#else
-      throw semlio::ConfigError(in.input + ": this build has no bag readers (install libbz2-dev liblz4-dev "
-                                "libzstd-dev libsqlite3-dev and reconfigure)");
-#endif
-    }
-    source->add_fact_front("format_decided_by", why);
-    return source;
+    // The sequence's own labels/ only when the run reads labels from files.
+    const bool label_files = opt.labels != "none" && opt.labels != "geometric";
+    return semlio_examples::open_source({.input = in.input,
+                                         .format = in.format,
+                                         .lidar_topic = in.lidar_topic,
+                                         .imu_topic = in.imu_topic,
+                                         .gt = in.gt,
+                                         .calib = in.calib,
+                                         .labels = label_files ? opt.labels : "",
+                                         .allow_missing_frames = opt.missing_frames == "empty"});
   }, [&](semlio_examples::FrameSource& source, semlio_examples::RunContext& ctx) {
     decide_sensor(in.sensor, in.platform, source, ctx);
   });
