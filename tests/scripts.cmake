@@ -85,22 +85,23 @@ if(SEMLIO_HAVE_BAGS)
   semlio_add_script_test(check_sim_bags ${SEMLIO_BASH} scripts/check_sim_bags.sh 3)
 endif()
 
-# semlio_run on every input format (bag, MCAP, KITTI folder, PCD folder, KITTI
-# raw drive), output guarding, SIGINT, missing frames, topic choice.
-if(SEMLIO_HAVE_BAGS)
-  add_test(NAME semlio_run_inputs
+# End-to-end checks of semlio_run and semlio_convert on the committed data:
+# tests/examples/NAME_check.cmake, run with both binaries, in a work folder
+# of its own.
+function(semlio_add_tool_check test check timeout)
+  add_test(NAME ${test}
            COMMAND ${CMAKE_COMMAND} "-DSEMLIO_RUN=$<TARGET_FILE:semlio_run>" "-DSEMLIO_CONVERT=$<TARGET_FILE:semlio_convert>"
-                   "-DDATA_DIR=${CMAKE_CURRENT_SOURCE_DIR}/data" "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/run_tool_check"
-                   -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/run_tool_check.cmake")
-  set_tests_properties(semlio_run_inputs PROPERTIES LABELS examples TIMEOUT 600)
-endif()
-# semlio_convert's dataset mode: bag, MCAP and KITTI raw drive to KITTI and PCD
-# folders that semlio_run reads back to byte-identical poses; lost fields,
-# bad frames, output guard, bad topic.
+                   "-DDATA_DIR=${CMAKE_CURRENT_SOURCE_DIR}/data" "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/${check}"
+                   -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/${check}.cmake")
+  set_tests_properties(${test} PROPERTIES LABELS examples TIMEOUT ${timeout})
+endfunction()
 if(SEMLIO_HAVE_BAGS)
-  add_test(NAME semlio_convert_dataset
-           COMMAND ${CMAKE_COMMAND} "-DSEMLIO_RUN=$<TARGET_FILE:semlio_run>" "-DSEMLIO_CONVERT=$<TARGET_FILE:semlio_convert>"
-                   "-DDATA_DIR=${CMAKE_CURRENT_SOURCE_DIR}/data" "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/convert_dataset_check"
-                   -P "${CMAKE_CURRENT_SOURCE_DIR}/examples/convert_dataset_check.cmake")
-  set_tests_properties(semlio_convert_dataset PROPERTIES LABELS examples TIMEOUT 120)
+  # semlio_run on every input format (bag, MCAP, KITTI folder, PCD folder,
+  # KITTI raw drive), output guarding, SIGINT, missing frames, topic choice,
+  # header stamps.
+  semlio_add_tool_check(semlio_run_inputs run_tool_check 600)
+  # semlio_convert's dataset mode: bag, MCAP and KITTI raw drive to KITTI and
+  # PCD folders that semlio_run reads back to byte-identical poses; lost
+  # fields, bad frames, output guard, bad topic.
+  semlio_add_tool_check(semlio_convert_dataset convert_dataset_check 120)
 endif()
