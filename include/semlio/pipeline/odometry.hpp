@@ -67,8 +67,8 @@ struct OdometryConfig {
   /// from that pose with the test on. Algorithm 1 compares the feature's
   /// axis, rotated by the current estimate, with the map's at 10 deg; a
   /// start off by more than that rejects the true matches. Hand-held
-  /// predictions are (BALM OS0: median 6 deg, max 28 deg off, see
-  /// prediction_rotation_scale), so the hand-held profile turns this on
+  /// predictions are off by that much (BALM OS0: median 6 deg, max 28 deg,
+  /// see prediction_rotation_scale), so the hand-held profile turns this on
   /// (presets.hpp). Associators without an axis test solve once.
   bool coarse_solve_first = false;
 };
@@ -295,9 +295,9 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     const bool no_motion_estimate = !has_prior && processed_ < 2;
     problem_.set_min_robust_scale_m(no_motion_estimate ? std::numeric_limits<double>::infinity() : 0.0);
     const bool coarse = no_motion_estimate || config_.coarse_solve_first;
-    const bool has_axis_test = problem_.set_axis_test(!coarse);
+    problem_.set_axis_test(!coarse);
     report.solve = gauss_newton(problem_, T, solver);
-    if (coarse && !no_motion_estimate && has_axis_test && report.solve.ok()) {
+    if (coarse && !no_motion_estimate && ScanToMapProblem<A, RC, RS>::kHasAxisTest && report.solve.ok()) {
       // The fine solve: Algorithm 1 from the coarse answer.
       const int coarse_iterations = report.solve.iterations;
       problem_.set_axis_test(true);

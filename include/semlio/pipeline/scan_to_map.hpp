@@ -137,16 +137,15 @@ class ScanToMapProblem {
     return widened;
   }
 
-  /// Switches the associators' axis test (NormalConsistency::set_axis_test)
-  /// off or on; associators without one (NearestK) ignore it. Returns
-  /// whether they have one.
-  bool set_axis_test(bool on) {
-    if constexpr (requires { corner_assoc_.set_axis_test(on); }) {
+  /// True when the associator has an axis test it can switch off
+  /// (NormalConsistency::set_axis_test); NearestK has none.
+  static constexpr bool kHasAxisTest = requires(A& a) { a.set_axis_test(true); };
+
+  /// Switches the associators' axis test off or on (no effect without one).
+  void set_axis_test(bool on) {
+    if constexpr (kHasAxisTest) {
       corner_assoc_.set_axis_test(on);
       surface_assoc_.set_axis_test(on);
-      return true;
-    } else {
-      return false;
     }
   }
 
