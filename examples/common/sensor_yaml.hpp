@@ -418,6 +418,7 @@ inline std::vector<std::pair<std::string, std::string>> sensor_facts(const semli
       {"elevation_max_deg", deg(p.beams.elevations_rad.back())},
       {"platform", m.name},
       {"header_stamp", semlio::to_string(p.header_stamp)},
+      {"mount_height_m", std::to_string(p.mount_height_m)},
   };
   if (d != nullptr) {
     f.emplace_back("detection", semlio::to_string(d->source));

@@ -362,7 +362,7 @@ inline double percentile(std::vector<double> v, double q) {
 // Front end + back end (Slam). With a lidar-inertial front end (--imu oxts
 // --loop on), `imu` feeds it before each scan.
 template <typename Odometry>
-inline RunResult run(Odometry odom, const BackEndSettings& be, bool write_map,
+RunResult run(Odometry odom, const BackEndSettings& be, bool write_map,
               const FrameReader& frames, std::size_t first, std::size_t last, bool quiet, const Checkpoint& checkpoint,
               [[maybe_unused]] ImuFeed* imu = nullptr) {
   RunResult result;
@@ -441,7 +441,7 @@ inline RunResult run(Odometry odom, const BackEndSettings& be, bool write_map,
 // pushed up to each sweep's end. poses: the LIO's (inertial graph);
 // odometry: the front end's scan-to-map poses. No back end, no map.
 template <typename Make>
-inline RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::vector<semlio::ImuSample>& imu,
+RunResult run_lio(Make make, const semlio::LidarInertialConfig& lc, const std::vector<semlio::ImuSample>& imu,
                   const std::vector<OxtsVelocity>& velocities, const FrameReader& frames,
                   std::size_t first, std::size_t last, bool quiet, const Checkpoint& checkpoint) {
   RunResult result;
@@ -531,7 +531,7 @@ inline void prepare_output_dir(const std::string& out, bool overwrite) {
 /// Writes a file through `write(temporary_path)` and renames it to `path`
 /// when complete, so that OUT never holds a truncated output.
 template <typename Write>
-inline void write_atomically(const fs::path& path, Write&& write) {
+void write_atomically(const fs::path& path, Write&& write) {
   const fs::path tmp = path.parent_path() / ("." + path.filename().string() + ".partial");
   write(tmp.string());
   std::error_code ec;

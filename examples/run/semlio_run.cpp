@@ -29,8 +29,7 @@ bool is_yaml_file(const std::string& s) {
 void apply_profile(const semlio::SensorProfile& profile, semlio_examples::FrameSource& source,
                    semlio_examples::RunContext& ctx) {
   source.set_header_stamp(profile.header_stamp, profile.sweep_period_s());
-  ctx.segmenter.sensor_height_m = profile.mount_height_m;
-  ctx.sensor_facts.emplace_back("mount_height_m", std::to_string(profile.mount_height_m));
+  ctx.segmenter.sensor_height_m = profile.mount_height_m;  // reported by sensor_facts()
 }
 
 // The sensor of a run (--sensor, --platform): a named profile, a sensor YAML,
