@@ -399,7 +399,7 @@ TEST_CASE("rosbag1: missing, foreign and hand-damaged files give typed errors", 
   }
 }
 
-TEST_CASE("rosbag1: XXH32 of known strings and of liblz4's frames; a wrong LZ4 content checksum is a FormatError",
+TEST_CASE("rosbag1: XXH32 of known strings and of liblz4's frames, and a wrong LZ4 content checksum is a FormatError",
           "[io][rosbag1]") {
   using semlio::io::detail::xxh32;
   const auto h = [](const std::string& s) { return xxh32(reinterpret_cast<const std::uint8_t*>(s.data()), s.size()); };
