@@ -9,10 +9,10 @@ set(SEMLIO_TESTS_fuzz_replay fuzz/test_replay.cpp)
 # the examples' headers: an executable of its own, as tests/docs does.
 if(SEMLIO_BUILD_EXAMPLES)
   find_package(yaml-cpp REQUIRED)
-  add_executable(semlio_tests_fuzz_yaml main.cpp fuzz/test_settings_yaml.cpp)
+  add_executable(semlio_tests_fuzz_yaml fuzz/test_settings_yaml.cpp)
   target_include_directories(semlio_tests_fuzz_yaml PRIVATE
     "${PROJECT_SOURCE_DIR}/examples/kitti" "${PROJECT_SOURCE_DIR}/examples/common")
-  target_link_libraries(semlio_tests_fuzz_yaml PRIVATE semlio::semlio Catch2::Catch2 yaml-cpp)
+  target_link_libraries(semlio_tests_fuzz_yaml PRIVATE semlio::semlio semlio_catch_main yaml-cpp)
   semlio_set_warnings(semlio_tests_fuzz_yaml)
   catch_discover_tests(semlio_tests_fuzz_yaml TEST_PREFIX "fuzz yaml: " EXTRA_ARGS --warn NoTests)
 endif()

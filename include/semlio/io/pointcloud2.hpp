@@ -167,7 +167,7 @@ inline double load_number(const std::uint8_t* p, std::uint8_t dt, bool swap) noe
     case 4: return load<std::uint16_t>(p, swap);
     case 5: return load<std::int32_t>(p, swap);
     case 6: return load<std::uint32_t>(p, swap);
-    case 7: return load<float>(p, swap);
+    case 7: return static_cast<double>(load<float>(p, swap));
     default: return load<double>(p, swap);
   }
 }

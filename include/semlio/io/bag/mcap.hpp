@@ -785,7 +785,8 @@ class McapReader {
       } else {
         continue;
       }
-      auto it = std::find_if(topics_.begin(), topics_.end(), [&](const BagTopic& t) { return t.name == ch.topic; });
+      const std::string& name = ch.topic;  // clang < 16 cannot capture a structured binding
+      auto it = std::find_if(topics_.begin(), topics_.end(), [&](const BagTopic& t) { return t.name == name; });
       if (it == topics_.end()) {
         BagTopic t;
         t.name = ch.topic;
