@@ -38,6 +38,7 @@
 #include <vector>
 
 #include <semlio/eval/ate.hpp>
+#include <semlio/eval/end_point.hpp>
 #include <semlio/eval/kitti_metric.hpp>
 #include <semlio/io/kitti.hpp>
 #include <semlio/io/ply.hpp>
@@ -181,11 +182,16 @@ struct ImuFeed {
   std::size_t next = 0;    // next sample to push
   std::size_t next_v = 0;  // next velocity to push
 
-  // Pushes everything up to the sweep's end (IMU clock) into `sink`.
+  // Pushes everything up to the sweep's end (IMU clock) into `sink`, and the
+  // first sample after it: the LIO predicts and deskews a sweep only with
+  // samples on both sides of it, and a 10 Hz IMU (KITTI raw's OXTS) has its
+  // next sample up to 0.1 s after the sweep's end; an online system waits
+  // for that sample too.
   template <typename Sink>
   void feed(Sink& sink, double scan_stamp_s) {
     const double until = scan_stamp_s + lc.imu_time_offset_s + lc.sweep_period_s + 1e-6;
     while (next < imu.size() && imu[next].stamp_s <= until) sink.push_imu(imu[next++]);
+    if (next < imu.size() && (next == 0 || imu[next - 1].stamp_s <= until)) sink.push_imu(imu[next++]);
     for (; next_v < velocities.size() && velocities[next_v].stamp_s <= until; ++next_v) {
       sink.push_velocity(velocities[next_v].stamp_s, velocities[next_v].v_imu_mps);
     }
@@ -651,9 +657,11 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
   std::optional<semlio::eval::AteReport> ate_kf;
   std::optional<semlio::eval::AteReport> ate_odom;
   std::optional<semlio::eval::KittiMetricReport> kitti;
+  semlio::eval::EndPointError end_point;
   if (ctx.gt_lidar && n >= 1) {
     const std::vector<SE3d> gt(ctx.gt_lidar->begin(), ctx.gt_lidar->begin() + static_cast<long>(n));
     ate_all = semlio::eval::ate(gt, fp.poses);
+    end_point = semlio::eval::end_point_error(gt, fp.poses);
     ate_odom = semlio::eval::ate(gt, fp.poses_odom);
     if (fp.keyframes.size() >= 3) ate_kf = semlio::eval::ate(gt, fp.poses, fp.keyframes);
     kitti = Tr ? semlio::eval::kitti_metric(semlio::io::lidar_to_camera(gt, *Tr), semlio::io::lidar_to_camera(fp.poses, *Tr))
@@ -734,6 +742,8 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
       if (ate_kf) ate_json("ate_keyframes", *ate_kf);
       ate_json("ate_all_frames_odometry", *ate_odom);
       j.field("path_length_m", path_length_m(fp.poses)).field("ground_truth_path_length_m", gt_path_m);
+      j.key("end_point").begin_object();
+      j.field("translation_m", end_point.translation_m).field("rotation_deg", end_point.rotation_deg).end_object();
       j.key("kitti").begin_object();
       j.field("segments", kitti->segment_count).field("translation_error_pct", kitti->translation_error_pct);
       j.field("rotation_error_deg_per_m", kitti->rotation_error_deg_per_m);
@@ -905,6 +915,8 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
     std::printf("\n  KITTI metric        %.3f %%  %.4f deg/100m  (%zu segments)\n", kitti->translation_error_pct,
                 kitti->rotation_error_deg_per_100m, kitti->segment_count);
     std::printf("  path length [m]     %.2f (ground truth %.2f)\n", path_length_m(fp.poses), gt_path_m);
+    std::printf("  end point error     %.3f m, %.3f deg (last frame relative to the first, no alignment)\n",
+                end_point.translation_m, end_point.rotation_deg);
   } else {
     std::printf("  no ground truth found: not evaluated\n");
   }
