@@ -137,7 +137,7 @@ class RangeProjection {
       }
     }
     for (double& w : inv_gauss_) w = 1.0 - w / sum;
-    window_.resize(inv_gauss_.size());
+    window_.resize(static_cast<std::size_t>(config_.knn.k));
   }
 
   /// Throws ConfigError naming the field and value when `c` is unusable.
@@ -285,6 +285,15 @@ class RangeProjection {
       throw ValueError("RangeProjection::back_project: " + std::to_string(point_labels.size()) +
                        " point labels for a scan of " + std::to_string(point_pixel_.size()) + " points");
     }
+    if (config_.knn.enabled) {
+      for (std::size_t q = 0; q < pixel_labels.size(); ++q) {
+        if (static_cast<int>(pixel_labels[q]) >= kNumClasses) {
+          throw ValueError("RangeProjection::back_project: pixel " + std::to_string(q) + " has class id " +
+                           std::to_string(static_cast<int>(pixel_labels[q])) + ", learning classes are 0.." +
+                           std::to_string(kNumClasses - 1));
+        }
+      }
+    }
     for (std::size_t i = 0; i < point_pixel_.size(); ++i) {
       const std::int32_t pix = point_pixel_[i];
       if (pix < 0) {
@@ -326,7 +335,7 @@ class RangeProjection {
     }
   }
 
-  // RangeNet++'s KNN.forward for one point whose pixel is `pix`.
+  // RangeNet++'s KNN.forward for one point whose pixel is `pix` (labels checked by back_project).
   Class vote(std::span<const Class> pixel_labels, std::int32_t pix, float range_m) const {
     const int s = config_.knn.search_px;
     const int pad = (s - 1) / 2;
@@ -335,56 +344,56 @@ class RangeProjection {
     const int row = pix / w;
     const int col = pix % w;
     const double r = static_cast<double>(range_m);
+    const double cutoff = config_.knn.cutoff_m;
+    const auto k_max = static_cast<std::size_t>(config_.knn.k);
     std::size_t count = 0;
     for (int dy = -pad; dy <= pad; ++dy) {
+      const int nr = row + dy;
       for (int dx = -pad; dx <= pad; ++dx) {
         const int slot = (dy + pad) * s + (dx + pad);
-        const int nr = row + dy, nc = col + dx;
+        const int nc = col + dx;
         double neighbour_range = 0.0;  // outside the image: RangeNet++'s zero padding
         Class label = Class::kUnlabeled;
         if (nr >= 0 && nr < h && nc >= 0 && nc < w) {
           const std::size_t q = static_cast<std::size_t>(nr) * static_cast<std::size_t>(w) + static_cast<std::size_t>(nc);
-          label = pixel_labels[q];
-          if (static_cast<int>(label) >= kNumClasses) {
-            throw ValueError("RangeProjection::back_project: pixel " + std::to_string(q) + " has class id " +
-                             std::to_string(static_cast<int>(label)) + ", learning classes are 0.." +
-                             std::to_string(kNumClasses - 1));
-          }
           if (dy == 0 && dx == 0) {
             neighbour_range = r;  // the centre counts with the point's own range
-          } else if (pixel_point_[q] < 0) {
-            continue;  // empty pixel: infinitely far, never votes
           } else {
-            neighbour_range = static_cast<double>(pixel_range_[q]);
+            const float pr = pixel_range_[q];
+            if (pr < 0.0f) continue;  // empty pixel: infinitely far, never votes
+            neighbour_range = static_cast<double>(pr);
           }
+          label = pixel_labels[q];
         }
-        window_[count++] = {std::abs(neighbour_range - r) * inv_gauss_[static_cast<std::size_t>(slot)], slot, label};
+        const double d = std::abs(neighbour_range - r) * inv_gauss_[static_cast<std::size_t>(slot)];
+        // Beyond the cutoff a neighbour never votes, and every neighbour
+        // nearer than it ranks before it: the voters are the k nearest of
+        // those within the cutoff.
+        if (d > cutoff) continue;
+        // Keep the k nearest sorted by (distance, slot) as they come: slots
+        // arrive in increasing order, so an equal distance goes behind.
+        if (count == k_max && !(d < window_[k_max - 1].distance)) continue;
+        std::size_t j = count < k_max ? count++ : k_max - 1;
+        for (; j > 0 && window_[j - 1].distance > d; --j) window_[j] = window_[j - 1];
+        window_[j] = {d, slot, label};
       }
     }
-    const std::size_t k = std::min(count, static_cast<std::size_t>(config_.knn.k));
-    const auto closer = [](const Neighbour& a, const Neighbour& b) {
-      return a.distance < b.distance || (a.distance == b.distance && a.slot < b.slot);
-    };
-    std::partial_sort(window_.begin(), window_.begin() + static_cast<std::ptrdiff_t>(k),
-                      window_.begin() + static_cast<std::ptrdiff_t>(count), closer);
+    const std::size_t k = count;
     std::array<int, kNumClasses> votes{};
-    for (std::size_t j = 0; j < k; ++j) {
-      const Neighbour& nb = window_[j];
-      if (nb.distance > config_.knn.cutoff_m || nb.label == Class::kUnlabeled) continue;
-      ++votes[static_cast<std::size_t>(nb.label)];
-    }
+    for (std::size_t j = 0; j < k; ++j) ++votes[static_cast<std::size_t>(window_[j].label)];
+    votes[0] = 0;  // unlabeled never votes
     std::size_t best = 0;
     for (std::size_t c = 1; c < votes.size(); ++c) {
       if (votes[c] > votes[best]) best = c;
     }
-    return votes[best] > 0 ? static_cast<Class>(best) : Class::kUnlabeled;
+    return static_cast<Class>(best);  // 0 (unlabeled) when nobody voted
   }
 
   RangeProjectionConfig config_;
   std::size_t pixels_ = 0;
   double fov_rad_ = 0.0;
   std::vector<double> inv_gauss_;             // 1 - normalised Gaussian, per window slot
-  mutable std::vector<Neighbour> window_;     // scratch of vote() (back_project is const)
+  mutable std::vector<Neighbour> window_;     // vote()'s k nearest so far (back_project is const)
   std::vector<std::int32_t> point_pixel_;     // per point
   std::vector<float> point_range_;            // per point [m]
   std::vector<std::int32_t> pixel_point_;     // per pixel
