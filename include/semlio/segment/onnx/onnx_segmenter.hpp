@@ -41,8 +41,10 @@ struct OnnxModelCard {
 };
 
 /// Segmenter running an ONNX range-image network through OpenCV DNN (CPU).
-/// Not thread-safe; copies share the loaded network (cv::dnn::Net is
-/// reference-counted), so neither may run while the other does.
+/// Not thread-safe; copies share the loaded network and its input buffer
+/// (cv::dnn::Net and cv::Mat are reference-counted), so neither may run
+/// while the other does. RangeProjection allocates nothing once grown; the
+/// forward pass allocates inside OpenCV.
 class OnnxSegmenter {
  public:
   /// Loads the model and runs it once on an empty image to check its output
