@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
 #include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <opencv2/dnn.hpp>
 
 #include <algorithm>
 #include <array>
@@ -299,6 +301,50 @@ TEST_CASE("OnnxSegmenter on a real KITTI scan with the kNN vote: every point as 
   CHECK(changed < a.size() / 5);
 }
 
+TEST_CASE("OnnxSegmenter runs a RangeNet++-shaped network (BN, leaky ReLU, strided conv, Resize, 20-class softmax)",
+          "[segment][onnx]") {
+  // tests/data/onnx/rangenet_like.onnx: random weights, so its labels mean
+  // nothing; what must hold is that OpenCV runs these operators and that
+  // OnnxSegmenter is exactly projection -> network -> first-max class ->
+  // mapping -> kNN, recomposed here from the public pieces and OpenCV.
+  semlio::OnnxModelCard card;
+  card.model_path = semlio_test::data_path("onnx/rangenet_like.onnx");
+  for (int id = 0; id < semlio::kNumClasses; ++id) card.classes.push_back(semlio::class_from_index(id));
+  const semlio::OnnxSegmenter seg(card);
+  semlio::Scan scan = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000000.bin"));
+  seg.segment(scan);
+  REQUIRE(scan.labels.size() == scan.size());
+
+  semlio::RangeProjection proj(card.projection);
+  proj.project(scan);
+  cv::dnn::Net net = cv::dnn::readNetFromONNX(card.model_path);
+  const int sizes[4] = {1, 5, 64, 2048};
+  cv::Mat blob(4, sizes, CV_32F);
+  std::copy(proj.input().begin(), proj.input().end(), blob.ptr<float>());
+  net.setInput(blob);
+  const cv::Mat out = net.forward();
+  REQUIRE(out.dims == 4);
+  REQUIRE(out.size[1] == 20);
+  const std::size_t hw = proj.pixel_count();
+  std::vector<Class> pixel_labels(hw);
+  std::array<int, semlio::kNumClasses> seen{};
+  const float* p = out.ptr<float>();
+  for (std::size_t q = 0; q < hw; ++q) {
+    std::size_t best = 0;
+    for (std::size_t c = 1; c < 20; ++c) {
+      if (p[c * hw + q] > p[best * hw + q]) best = c;
+    }
+    pixel_labels[q] = semlio::class_from_index(static_cast<int>(best));
+    if (proj.pixel_points()[q] >= 0) ++seen[best];
+  }
+  std::vector<Class> want(scan.size());
+  proj.back_project(pixel_labels, want);
+  CHECK(scan.labels == want);
+  int classes_seen = 0;
+  for (const int n : seen) classes_seen += n > 0 ? 1 : 0;
+  CHECK(classes_seen >= 3);  // random weights still spread the scan over several classes
+}
+
 TEST_CASE("OnnxSegmenter: an empty scan gives no labels; a scan without intensity is a ValueError", "[segment][onnx]") {
   const semlio::OnnxSegmenter seg(kitti_card());
   semlio::Scan empty;
@@ -391,6 +437,15 @@ TEST_CASE("load_model_card_yaml reads tests/data/onnx/tiny_kitti.yaml", "[segmen
   semlio::Scan scan = semlio::io::read_kitti_bin(semlio_test::data_path("kitti/sequences/00/velodyne/000001.bin"));
   seg.segment(scan);
   CHECK(scan.labels.size() == scan.size());
+}
+
+TEST_CASE("load_model_card_yaml: rangenet_like.yaml lists SemanticKITTI's 20 learning classes in RangeNet++'s order",
+          "[segment][onnx]") {
+  const semlio::OnnxModelCard card =
+      semlio_examples::load_model_card_yaml(semlio_test::data_path("onnx/rangenet_like.yaml"));
+  REQUIRE(card.classes.size() == 20);
+  for (int id = 0; id < semlio::kNumClasses; ++id) CHECK(card.classes[static_cast<std::size_t>(id)] == semlio::class_from_index(id));
+  CHECK_NOTHROW(semlio::OnnxSegmenter(card));
 }
 
 TEST_CASE("load_model_card_yaml: every problem is a ConfigError naming the file, line and key", "[segment][onnx]") {
