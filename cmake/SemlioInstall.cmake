@@ -7,6 +7,9 @@ install(TARGETS semlio EXPORT semlioTargets)
 if(SEMLIO_HAVE_BAGS)
   install(TARGETS semlio_io_bags EXPORT semlioTargets)
 endif()
+if(SEMLIO_HAVE_ONNX)
+  install(TARGETS semlio_segment_onnx EXPORT semlioTargets)
+endif()
 install(DIRECTORY "${PROJECT_SOURCE_DIR}/include/semlio"
         DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}")
 set(SEMLIO_CMAKE_DIR "${CMAKE_INSTALL_DATADIR}/semlio/cmake")
@@ -22,4 +25,5 @@ write_basic_package_version_file(
   COMPATIBILITY SameMinorVersion ARCH_INDEPENDENT)
 install(FILES "${PROJECT_BINARY_DIR}/semlioConfig.cmake"
               "${PROJECT_BINARY_DIR}/semlioConfigVersion.cmake"
+              "${PROJECT_SOURCE_DIR}/cmake/SemlioOnnx.cmake"  # its OpenCV search, for the config
         DESTINATION "${SEMLIO_CMAKE_DIR}")

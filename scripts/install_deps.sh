@@ -4,8 +4,9 @@
 set -euo pipefail
 
 # pkg-config and the four -dev packages: the optional bag readers (cmake/SemlioBags.cmake).
+# libopencv-dnn-dev: the optional ONNX segmenter (cmake/SemlioOnnx.cmake).
 packages=(build-essential cmake libeigen3-dev libnanoflann-dev catch2 libbenchmark-dev libcli11-dev libyaml-cpp-dev
-          pkg-config libbz2-dev liblz4-dev libzstd-dev libsqlite3-dev "$@")
+          pkg-config libbz2-dev liblz4-dev libzstd-dev libsqlite3-dev libopencv-dnn-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -105,3 +105,10 @@ if(SEMLIO_HAVE_BAGS)
   # fields, bad frames, output guard, bad topic.
   semlio_add_tool_check(semlio_convert_dataset convert_dataset_check 120)
 endif()
+# semlio_run --labels onnx on the real KITTI raw snippet with the tiny model of
+# tests/data/onnx; --labels onnx without --model or with a missing model fails.
+add_test(NAME semlio_run_onnx_labels
+         COMMAND ${CMAKE_COMMAND} "-DSEMLIO_RUN=$<TARGET_FILE:semlio_run>" "-DHAVE_ONNX=${SEMLIO_HAVE_ONNX}"
+                 "-DDATA_DIR=${CMAKE_CURRENT_SOURCE_DIR}/data" "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/onnx_run_check"
+                 -P "${CMAKE_CURRENT_SOURCE_DIR}/segment/onnx_run_check.cmake")
+set_tests_properties(semlio_run_onnx_labels PROPERTIES LABELS examples TIMEOUT 300)

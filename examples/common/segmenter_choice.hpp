@@ -16,6 +16,9 @@
 #include <semlio/core/scan.hpp>
 #include <semlio/segment/geometric_segmenter.hpp>
 #include <semlio/segment/scan_labels.hpp>
+#if SEMLIO_HAVE_ONNX
+#include <semlio/segment/onnx/onnx_segmenter.hpp>
+#endif
 
 namespace semlio_examples {
 
@@ -23,7 +26,11 @@ namespace semlio_examples {
 class SegmenterChoice {
  public:
   /// The segmenters on offer.
+#if SEMLIO_HAVE_ONNX
+  using Variant = std::variant<semlio::NoLabels, semlio::ScanLabels, semlio::GeometricSegmenter, semlio::OnnxSegmenter>;
+#else
   using Variant = std::variant<semlio::NoLabels, semlio::ScanLabels, semlio::GeometricSegmenter>;
+#endif
 
   /// The chosen segmenter.
   explicit SegmenterChoice(Variant segmenter) : segmenter_(std::move(segmenter)) {}

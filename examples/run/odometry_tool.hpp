@@ -49,6 +49,9 @@
 #include <semlio/pipeline/slam.hpp>
 #include <semlio/segment/geometric_segmenter.hpp>
 #include <semlio/segment/scan_labels.hpp>
+#if SEMLIO_HAVE_ONNX
+#include "model_card_yaml.hpp"
+#endif
 
 #include "frame_source.hpp"
 #include "json_writer.hpp"
@@ -62,7 +65,8 @@ using semlio::SE3d;
 
 /// Every option semlio_kitti and semlio_run share (the input options are each tool's own).
 struct RunOptions {
-  std::string labels = "labels";  // labels|predictions|geometric|none
+  std::string labels = "labels";  // labels|predictions|geometric|onnx|none
+  std::string model;              // --labels onnx: the model card (YAML)
   std::string preset = "full";    // baseline|full
   std::string config;
   std::string kitti_correction = "auto";  // on|off|auto
@@ -93,8 +97,10 @@ inline const std::vector<std::string>& output_names() {
 /// Adds the options every odometry tool shares to `app`.
 inline void add_run_options(CLI::App& app, RunOptions& opt) {
   app.add_option("--labels", opt.labels, "label source: labels/predictions (a SemanticKITTI folder), geometric (the "
-                                         "GeometricSegmenter), none")
-      ->check(CLI::IsMember({"labels", "predictions", "geometric", "none"}));
+                                         "GeometricSegmenter), onnx (a range-image network, --model), none")
+      ->check(CLI::IsMember({"labels", "predictions", "geometric", "onnx", "none"}));
+  app.add_option("--model", opt.model, "with --labels onnx: the network's model card (YAML: model, image, channels, "
+                                       "classes, knn; docs/guide.md)");
   app.add_option("--preset", opt.preset, "baseline (LIO-SAM-like) or full (the paper)")
       ->check(CLI::IsMember({"baseline", "full"}));
   app.add_option("--config", opt.config, "YAML file overriding preset settings");
@@ -567,6 +573,7 @@ struct RunContext {
   std::vector<std::pair<std::string, std::string>> sensor_facts;  // summary + report.json "sensor"
   std::optional<SE3d> T_imu_lidar;  // lidar -> IMU extrinsic given beside the data (sensor YAML), else the input's
   semlio::GeometricSegmenterConfig segmenter;  // --labels geometric; its sensor height follows the sensor profile
+  std::string onnx_model;  // --labels onnx: the .onnx file the model card names
 };
 
 /// One pose per frame done: skipped frames interpolated by stamp, deskewed
@@ -707,6 +714,7 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
       j.end_object();
     }
     j.field("sequence", facts.path).field("preset", opt.preset).field("labels", ctx.use_labels ? opt.labels : "none");
+    if (opt.labels == "onnx") j.field("label_model_card", opt.model).field("label_model", ctx.onnx_model);
     j.field("first_frame", static_cast<long long>(first)).field("last_frame", static_cast<long long>(last_done));
     j.field("frames_requested", static_cast<long long>(ctx.last - ctx.first + 1));
     j.field("frames_done", n);
@@ -975,10 +983,25 @@ int run_tool(const char* tool, const RunOptions& opt, const std::function<std::u
     return 2;
   }
   try {
+    // --labels onnx: the model card and the network are checked before OUT is touched.
+    std::optional<SegmenterChoice::Variant> network;
+    if (opt.labels == "onnx") {
+      if (opt.model.empty()) {
+        throw semlio::ConfigError("--labels onnx needs --model CARD.yaml (the network's model card, docs/guide.md)");
+      }
+#if SEMLIO_HAVE_ONNX
+      network.emplace(semlio::OnnxSegmenter(load_model_card_yaml(opt.model)));
+#else
+      throw semlio::ConfigError("--labels onnx: this build has no ONNX segmenter (it needs OpenCV's dnn module, "
+                                "Debian libopencv-dnn-dev, when semlio is configured)");
+#endif
+    } else if (!opt.model.empty()) {
+      std::cerr << tool << ": warning: --model is only used with --labels onnx\n";
+    }
     prepare_output_dir(opt.out, opt.overwrite);
     const std::unique_ptr<FrameSource> source_ptr = open();
     FrameSource& source = *source_ptr;
-    if (opt.labels != "none" && opt.labels != "geometric" && !source.has_labels()) {
+    if (opt.labels != "none" && opt.labels != "geometric" && opt.labels != "onnx" && !source.has_labels()) {
       std::cerr << tool << ": warning: " << source.facts().path << " has no " << opt.labels
                 << " labels; running without labels\n";
     }
@@ -994,6 +1017,9 @@ int run_tool(const char* tool, const RunOptions& opt, const std::function<std::u
     const auto last_u = static_cast<std::size_t>(last);
 
     RunContext ctx(tool, opt, source);
+#if SEMLIO_HAVE_ONNX
+    if (network) ctx.onnx_model = std::get<semlio::OnnxSegmenter>(*network).card().model_path;
+#endif
     ctx.first = first;
     ctx.last = last_u;
     ctx.Tr = source.T_cam0_lidar();
@@ -1076,7 +1102,7 @@ int run_tool(const char* tool, const RunOptions& opt, const std::function<std::u
     }
 
     const bool geometric = opt.labels == "geometric";
-    ctx.use_labels = geometric || (opt.labels != "none" && source.has_labels());
+    ctx.use_labels = geometric || network || (opt.labels != "none" && source.has_labels());
     const FrameReader frames{source, opt.bad_scans == "skip", tool, settings.deskew.frame_period_s};
     const Checkpoint checkpoint = [&ctx](const RunResult& partial) { write_outputs(ctx, partial, "running", false); };
     if (ctx.use_imu && opt.imu_time_offset == "auto") {
@@ -1113,7 +1139,8 @@ int run_tool(const char* tool, const RunOptions& opt, const std::function<std::u
                  : run(semlio::make_full_odometry(segmenter, settings), back_end, ctx.write_map, frames, first, last_u,
                        opt.quiet, checkpoint);
     };
-    result = run_preset(SegmenterChoice(geometric          ? SegmenterChoice::Variant(semlio::GeometricSegmenter(ctx.segmenter))
+    result = run_preset(SegmenterChoice(network            ? std::move(*network)
+                                        : geometric        ? SegmenterChoice::Variant(semlio::GeometricSegmenter(ctx.segmenter))
                                         : ctx.use_labels ? SegmenterChoice::Variant(semlio::ScanLabels{})
                                                          : SegmenterChoice::Variant(semlio::NoLabels{})));
     write_outputs(ctx, result, result.interrupted ? "interrupted" : "complete", true);

@@ -1,1 +1,1 @@
-set(SEMLIO_TESTS_segment_segment segment/test_geometric_segmenter.cpp)
+set(SEMLIO_TESTS_segment_segment segment/test_geometric_segmenter.cpp segment/test_range_projection.cpp)
