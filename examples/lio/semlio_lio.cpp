@@ -317,6 +317,8 @@ int main(int argc, char** argv) {
         run([&](semlio::Scan& scan, std::size_t i) {
           const double until = scan.stamp_s + lc.imu_time_offset_s + lc.sweep_period_s + 1e-6;
           while (next < imu.size() && imu[next].stamp_s <= until) lio.push_imu(imu[next++]);
+          // and the first sample after the sweep (semlio_run's ImuFeed: a 10 Hz IMU's next sample)
+          if (next < imu.size() && (next == 0 || imu[next - 1].stamp_s <= until)) lio.push_imu(imu[next++]);
           while (next_v < velocities.size() && velocities[next_v].stamp_s <= until) {
             lio.push_velocity(velocities[next_v].stamp_s, velocities[next_v].v_imu_mps);
             ++next_v;

@@ -58,8 +58,8 @@ namespace semlio {
 
 /// Settings of initialize_inertial().
 struct InertialInitConfig {
-  std::size_t min_frames = 20;             ///< lidar poses needed (>= 3); 2 s at 10 Hz averages front-end jitter
-  double min_duration_s = 1.9;             ///< time span they must cover [s]
+  std::size_t min_frames = 10;             ///< lidar poses needed (>= 3): 1 s at 10 Hz (scripts/kitti_raw_drive.sh: the real drive initialises by frame 10)
+  double min_duration_s = 0.9;             ///< time span they must cover [s]
   double position_sigma_m = 0.05;          ///< lidar position noise (weights the position rows) [m]
   double velocity_sigma_mps = 0.01;        ///< IMU delta-velocity noise (weights the velocity rows) [m/s]
   bool estimate_accel_bias = false;        ///< also solve for the accelerometer bias (needs rotation)
