@@ -13,8 +13,9 @@
 
 #include "frame_source.hpp"
 #include "odometry_tool.hpp"
+#include "tool_mains.hpp"
 
-int main(int argc, char** argv) {
+int semlio_examples::semlio_kitti_main(int argc, char** argv) {
   semlio_examples::RunOptions opt;
   std::string sequence;
   std::string gt;

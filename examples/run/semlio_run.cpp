@@ -13,6 +13,7 @@
 #include "odometry_tool.hpp"
 #include "open_source.hpp"
 #include "sensor_yaml.hpp"
+#include "tool_mains.hpp"
 
 namespace {
 
@@ -103,7 +104,7 @@ struct InputOptions {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int semlio_examples::semlio_run_main(int argc, char** argv) {
   semlio_examples::RunOptions opt;
   InputOptions in;
   CLI::App app{"semlio_run: semantic lidar(-inertial) odometry on KITTI, KITTI raw, scan folders and ROS 1 / ROS 2 bags"};
