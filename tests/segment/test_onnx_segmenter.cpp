@@ -345,7 +345,7 @@ TEST_CASE("OnnxSegmenter runs a RangeNet++-shaped network (BN, leaky ReLU, strid
   CHECK(classes_seen >= 3);  // random weights still spread the scan over several classes
 }
 
-TEST_CASE("OnnxSegmenter: an empty scan gives no labels; a scan without intensity is a ValueError", "[segment][onnx]") {
+TEST_CASE("OnnxSegmenter: an empty scan gives no labels, and a scan without intensity is a ValueError", "[segment][onnx]") {
   const semlio::OnnxSegmenter seg(kitti_card());
   semlio::Scan empty;
   seg.segment(empty);
