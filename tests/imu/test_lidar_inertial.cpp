@@ -1,7 +1,7 @@
 // LidarInertialOdometry (pipeline/lidar_inertial.hpp), in three parts kept in
 // their own namespaces. One translation unit on purpose: each instantiation of
-// the lidar-inertial pipeline costs GCC about two minutes of front-end time, and
-// the three parts used to pay it three times in the test build.
+// the lidar-inertial pipeline costs GCC about two minutes of front-end time,
+// which three translation units would pay three times.
 //
 // odometry_cases:
 //   LidarInertialOdometry on a short simulated urban drive held in memory
@@ -404,10 +404,10 @@ TEST_CASE("LIO with IMU deskew on a whole distorted drive: every frame deskewed,
   // The IMU-deskewed frames after initialisation must remove most of that.
   CHECK(err_last < 0.5 * err_at_init);
   CHECK(err_with < 1.0);
-  // The weak-direction reset no longer applies to the constant-velocity
-  // start-up frames of sweeps that are not deskewed: 1.91 m worst on the
-  // undistorted scans and 3.33 m on the distorted ones when it did (both
-  // ~0.1 m now).
+  // The weak-direction reset does not apply to the constant-velocity
+  // start-up frames of sweeps that are not deskewed: applied there, it gave
+  // 1.91 m worst on the undistorted scans and 3.33 m on the distorted ones
+  // (both ~0.1 m without).
   CHECK(err_clean < 0.5);
   CHECK(err_without < 0.5);
 }

@@ -544,9 +544,9 @@ FullWeightRun run_full_weight(const Eigen::Vector3d& g, bool gravity_gauge) {
 TEST_CASE("lidar-inertial Slam at full IMU weight: its IMU factors agree with the truth", "[imu]") {
   // The graph's own IMU factors (samples, keyframe interval, linearisation
   // bias, gravity, frames) evaluated at the true states: chi2 ~ 9 when the
-  // graph is given the true gravity. Slam used to rotate gravity by each
-  // keyframe's world-odometry correction, so the graph's attitude errors
-  // tilted later factors (600-frame drive at full weight: median 7430; here
+  // graph is given the true gravity. Rotating gravity by each keyframe's
+  // world-odometry correction would let the graph's attitude errors tilt
+  // later factors (600-frame drive at full weight: median 7430; here
   // median 19.6).
   const Truth& truth = drive_truth();
   const FullWeightRun run = run_full_weight(truth.gravity(), true);

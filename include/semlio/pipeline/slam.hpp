@@ -106,12 +106,12 @@
 ///
 /// Gravity. Every IMU factor gets the map's gravity as the front end
 /// estimated it (LidarInertialOdometry: at initialisation, never refined), a
-/// constant of the graph's world frame. (It used to be rotated by the
-/// keyframe's world-odometry correction like the velocity; that let the
-/// graph's attitude errors tilt the gravity of later factors: 600-frame
-/// drive, full IMU weight, graph given the true gravity: median IMU chi2 at
-/// the ground truth 7430 before, 8.4 after = the true preintegration's;
-/// tests/imu/test_lio_slam.cpp.) The graph estimates the gravity DIRECTION
+/// constant of the graph's world frame. It is not rotated by the keyframe's
+/// world-odometry correction as the velocity is: that would let the graph's
+/// attitude errors tilt the gravity of later factors (600-frame drive, full
+/// IMU weight, graph given the true gravity: median IMU chi2 at the ground
+/// truth 7430 rotated, 8.4 constant = the true preintegration's;
+/// tests/imu/test_lio_slam.cpp). The graph estimates the gravity DIRECTION
 /// (inertial_gravity_gauge, default on): once the first IMU factor is in,
 /// the first keyframe's prior holds only its position and its rotation about
 /// gravity (gravity_gauge_information(), the standard 4-DoF inertial gauge),

@@ -51,14 +51,14 @@
 ///
 /// Why not LIO-SAM's absolute test (eigenvalue of H < 100) for the flag: H
 /// grows with the number of residuals and with the squared semantic and
-/// robust weights (<= 1), so the same geometry was flagged or not depending
-/// on the preset: on the main job's simulated drive (scripts/demo.sh)
-/// `full` was flagged on 112 of 300 frames, `baseline` on 8. The absolute
-/// threshold still shapes the *step* during the iterations (stage 1 of
+/// robust weights (<= 1), so the same geometry is flagged or not depending
+/// on the preset: on the main job's simulated drive (scripts/demo.sh) it
+/// flags `full` on 112 of 300 frames, `baseline` on 8. The absolute
+/// threshold shapes only the *step* during the iterations (stage 1 of
 /// gauss_newton(): LIO-SAM's remapping, or damping) as a safeguard against
-/// directions with almost no information; it no longer sets the flag, so
-/// lidar-only odometry (semlio_kitti without --imu) gives the same poses as
-/// before, bit for bit. Consumers of the flag change: LIO reset and
+/// directions with almost no information; it does not set the flag, and the
+/// flag does not change a lidar-only solution (semlio_kitti without --imu).
+/// Consumers of the flag: LIO reset and
 /// information along flagged directions (pipeline/lidar_inertial.hpp), loop
 /// rejection (loop/loop_verifier.hpp), the odometry status.
 ///
