@@ -59,7 +59,8 @@ if [[ $QUICK == 1 ]]; then OUT=${OUT:-results/reproduce_quick}; else OUT=${OUT:-
 if [[ -z "${SKIP_BUILD:-}" ]]; then
   scripts/install_deps.sh python3-matplotlib
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
-  cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_simulate semlio_kitti semlio_convert semlio_segment_eval
+  cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_simulate semlio_kitti semlio_convert semlio_segment_eval \
+    semlio_run
 fi
 BIN="$BUILD_DIR/examples"
 for tool in semlio_simulate semlio_kitti semlio_convert semlio_segment_eval; do
@@ -167,6 +168,14 @@ if [[ $QUICK == 0 ]]; then
     printf 'deskew: {mode: constant_velocity, point_times: azimuth}\n' > "$OUT/configs/$name.extra.yaml"
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$OUT/data/$name" real "KITTI raw $(basename "$drive")" \
       geometric "$OUT/configs/$name.extra.yaml" "OXTS GNSS/INS (~0.5 m)" >> "$DS"
+    # The same drive read as published by semlio_run, lidar only and with its
+    # OXTS IMU (the page's "Lidar-inertial on a real drive").
+    if [[ -x "$BIN/semlio_run" ]]; then
+      echo "== $name: lidar-only and lidar-inertial (scripts/kitti_raw_drive.sh)"
+      mkdir -p "$OUT/lio"
+      SKIP_BUILD=1 BUILD_DIR="$BUILD_DIR" OUT="$OUT/lio/$name" REPORT_ONLY=1 scripts/kitti_raw_drive.sh "$drive" \
+        > "$OUT/lio/$name.txt" 2>&1 || { cat "$OUT/lio/$name.txt" >&2; exit 1; }
+    fi
   fi
   if [[ -n "${KITTI_ROOT:-}" ]] && wanted "kitti_$(basename "${KITTI_ROOT%/}")"; then
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "kitti_$(basename "${KITTI_ROOT%/}")" "${KITTI_ROOT%/}" real \
