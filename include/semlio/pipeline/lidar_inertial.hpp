@@ -23,9 +23,13 @@
 ///
 /// Frames and time: the graph lives in the front end's map frame; states are
 /// the IMU's (T_map_imu = T_map_lidar * T_imu_lidar^-1). Scan stamps are sweep
-/// starts in the lidar clock; t_imu = t_lidar + imu_time_offset_s. Push IMU
-/// samples up to the sweep END (stamp + sweep_period_s) before process() when
-/// deskewing, up to the stamp otherwise.
+/// starts in the lidar clock; t_imu = t_lidar + imu_time_offset_s. Before
+/// process(), push the IMU samples up to the sweep END (stamp +
+/// sweep_period_s) when deskewing, up to the stamp otherwise, AND the first
+/// sample after that time: prediction and deskew interpolate between
+/// samples, so a sweep is covered only by samples on both sides of it (a
+/// 10 Hz IMU such as KITTI raw's OXTS has its next one up to 0.1 s later;
+/// semlio_run and semlio_lio wait for it, as an online system would).
 ///
 /// IMU trouble is never a crash. push_imu() rejects non-finite samples and
 /// samples not after the previous one (counted, last reason kept). When the
