@@ -165,19 +165,14 @@ def make_rangenet_like():
 def main():
     out_dir = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "tests", "data", "onnx")
     os.makedirs(out_dir, exist_ok=True)
-    model_path = os.path.join(out_dir, "tiny_linear.onnx")
-    with open(model_path, "wb") as f:
-        f.write(make_model().SerializeToString())
-    with open(os.path.join(out_dir, "tiny_kitti.yaml"), "w") as f:
-        f.write(KITTI_CARD)
-    print(f"wrote {model_path} ({os.path.getsize(model_path)} bytes) and tiny_kitti.yaml")
-    like_path = os.path.join(out_dir, "rangenet_like.onnx")
-    with open(like_path, "wb") as f:
-        f.write(make_rangenet_like().SerializeToString())
-    with open(os.path.join(out_dir, "rangenet_like.yaml"), "w") as f:
-        f.write(RANGENET_CARD)
-    print(f"wrote {like_path} ({os.path.getsize(like_path)} bytes) and rangenet_like.yaml")
-
+    for stem, model, card_name, card in (("tiny_linear", make_model(), "tiny_kitti.yaml", KITTI_CARD),
+                                         ("rangenet_like", make_rangenet_like(), "rangenet_like.yaml", RANGENET_CARD)):
+        path = os.path.join(out_dir, stem + ".onnx")
+        with open(path, "wb") as f:
+            f.write(model.SerializeToString())
+        with open(os.path.join(out_dir, card_name), "w") as f:
+            f.write(card)
+        print(f"wrote {path} ({os.path.getsize(path)} bytes) and {card_name}")
 
 if __name__ == "__main__":
     main()
