@@ -95,6 +95,22 @@ std::function<void(const YAML::Node&)> set(T& field) {
   };
 }
 
+/// SemanticWeightConfig::mode from its name: chance_corrected, paper, off.
+inline std::function<void(const YAML::Node&)> semantic_weight_mode(semlio::SemanticWeightMode& field) {
+  return [&field](const YAML::Node& n) {
+    const std::string v = n.IsScalar() ? n.Scalar() : std::string();
+    if (v == "chance_corrected") {
+      field = semlio::SemanticWeightMode::kChanceCorrected;
+    } else if (v == "paper") {
+      field = semlio::SemanticWeightMode::kPaper;
+    } else if (v == "off") {
+      field = semlio::SemanticWeightMode::kOff;
+    } else {
+      throw BadValue{"is " + kind_of(n) + ", expected chance_corrected, paper or off"};
+    }
+  };
+}
+
 /// A numeric field with its domain [lo, hi] ((lo, hi] when `lo_open`): the
 /// value must be finite, integral for integer fields, and inside the domain.
 template <typename T>
@@ -244,6 +260,7 @@ inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings
        {{"three_point", set(s.plane.three_point)},
         {"max_planarity_ratio", num(s.plane.max_planarity_ratio, 0.0, 1e6)},
         {"min_spread_ratio", num(s.plane.min_spread_ratio, 0.0, 1e6)}}},
+      {"semantic_weights", {{"mode", detail::semantic_weight_mode(s.semantic_weights.mode)}}},
       {"pose_threshold",
        {{"translation_threshold_m", num(s.pose_threshold.translation_threshold_m, 0.0, 1e4)},
         {"rotation_threshold_rad", num(s.pose_threshold.rotation_threshold_rad, 0.0, kPi)}}},

@@ -835,6 +835,8 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
       j.field("status", frame_status(result, i)).field("keyframe", r.keyframe);
       j.field("points", r.points).field("corners", r.corners).field("surfaces", r.surfaces);
       j.field("corner_matches", r.corner_matches).field("surface_matches", r.surface_matches);
+      if (std::isfinite(r.corner_label_kappa)) j.field("corner_label_kappa", r.corner_label_kappa);
+      if (std::isfinite(r.surface_label_kappa)) j.field("surface_label_kappa", r.surface_label_kappa);
       j.field("iterations", r.solve.iterations).field("solver_status", semlio::to_string(r.solve.status));
       j.field("degenerate_directions", r.solve.degenerate_directions);
       j.array_field("eigenvalues", std::vector<double>(r.solve.eigenvalues.data(), r.solve.eigenvalues.data() + 6));

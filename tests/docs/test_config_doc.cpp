@@ -98,6 +98,10 @@ std::map<std::string, Getter> getters() {
   SEMLIO_KEY("plane.three_point", s.plane.three_point);
   SEMLIO_KEY("plane.max_planarity_ratio", s.plane.max_planarity_ratio);
   SEMLIO_KEY("plane.min_spread_ratio", s.plane.min_spread_ratio);
+  SEMLIO_KEY("semantic_weights.mode",
+             s.semantic_weights.mode == semlio::SemanticWeightMode::kChanceCorrected ? "chance_corrected"
+             : s.semantic_weights.mode == semlio::SemanticWeightMode::kPaper         ? "paper"
+                                                                                     : "off");
   SEMLIO_KEY("pose_threshold.translation_threshold_m", s.pose_threshold.translation_threshold_m);
   SEMLIO_KEY("pose_threshold.rotation_threshold_rad", s.pose_threshold.rotation_threshold_rad);
   SEMLIO_KEY("semantic_keyframes.translation_threshold_m", s.semantic_keyframes.translation_threshold_m);

@@ -258,6 +258,44 @@ TEST_CASE("Semantic weight scales residual and Jacobian (eq. 10-12)", "[residual
   CHECK(none.r.isZero());
 }
 
+TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label reliability falls", "[residual]") {
+  using semlio::SemanticWeightMode;
+  // 1 of 4 matches agrees: a = 0.25.
+  const MatchedPoints plane = make_matches({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}},
+                                           {Class::kRoad, Class::kSidewalk, Class::kSidewalk, Class::kTerrain});
+  const FeaturePoint f{{0.3, 0.2, 0.5}, Class::kRoad};
+  const double d = std::abs(semlio::PointToPlane{}.evaluate(f, plane, SE3d()).r(0));
+  REQUIRE(d == Approx(0.5));
+  const auto weighted_distance = [&](const WeightedPlane& w) { return std::abs(w.evaluate(f, plane, SE3d()).r(0)); };
+
+  const WeightedPlane paper(semlio::PointToPlane{}, {.mode = SemanticWeightMode::kPaper});
+  const WeightedPlane off(semlio::PointToPlane{}, {.mode = SemanticWeightMode::kOff});
+  WeightedPlane corrected;  // the default mode
+  CHECK(corrected.config().mode == SemanticWeightMode::kChanceCorrected);
+  CHECK(weighted_distance(paper) == Approx(0.25 * d));
+  CHECK(weighted_distance(off) == Approx(d));
+  // Before any kappa is set the chance-corrected weight is the paper's.
+  CHECK(corrected.label_reliability() == 1.0);
+  CHECK(weighted_distance(corrected) == Approx(0.25 * d));
+  // w = 1 - kappa (1 - a): kappa 0.6 -> 1 - 0.6 * 0.75 = 0.55.
+  corrected.set_label_reliability(0.6);
+  CHECK(weighted_distance(corrected) == Approx(0.55 * d));
+  // Labels no better than chance leave the residual unweighted.
+  corrected.set_label_reliability(0.0);
+  CHECK(weighted_distance(corrected) == Approx(d));
+  // Out-of-range and NaN kappas are clamped (NaN: no evidence, 0).
+  corrected.set_label_reliability(1.7);
+  CHECK(corrected.label_reliability() == 1.0);
+  corrected.set_label_reliability(-0.2);
+  CHECK(corrected.label_reliability() == 0.0);
+  corrected.set_label_reliability(std::numeric_limits<double>::quiet_NaN());
+  CHECK(corrected.label_reliability() == 0.0);
+  // The paper's and the off mode ignore kappa.
+  WeightedPlane paper_k = paper;
+  paper_k.set_label_reliability(0.0);
+  CHECK(weighted_distance(paper_k) == Approx(0.25 * d));
+}
+
 TEST_CASE("Robust kernels give the IRLS weight of the current residual", "[residual]") {
   const MatchedPoints flat = make_matches({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}}, {});
   const FeaturePoint far{{0.3, 0.2, 0.5}, Class::kRoad};   // r = 0.5

@@ -126,6 +126,8 @@ struct FrameReport {
   std::size_t surfaces = 0;              ///< surface features
   std::size_t corner_matches = 0;        ///< corners with correspondences (final association)
   std::size_t surface_matches = 0;       ///< surfaces with correspondences (final association)
+  double corner_label_kappa = std::numeric_limits<double>::quiet_NaN();   ///< Cohen's kappa of corner vs map labels at the final association (the semantic weights' reliability); NaN when no residual weighs labels
+  double surface_label_kappa = std::numeric_limits<double>::quiet_NaN();  ///< the same for surface features
   bool keyframe = false;                 ///< became a keyframe
   StageTimings timings;                  ///< per-stage wall time
 };
@@ -309,6 +311,8 @@ class Odometry<S, A, LoamResiduals<RC, RS>, K, D> {
     const auto [cm, sm] = problem_.matched_counts();
     report.corner_matches = cm;
     report.surface_matches = sm;
+    report.corner_label_kappa = problem_.corner_label_reliability();
+    report.surface_label_kappa = problem_.surface_label_reliability();
     report.timings.solve_ms = ms_since(t);
     report.timings.scan_shapes_ms = problem_.timings().scan_shapes_ms;
     report.timings.associate_ms = problem_.timings().associate_ms;

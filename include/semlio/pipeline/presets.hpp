@@ -67,6 +67,7 @@ struct PipelineSettings {
   PointToLineConfig line{};                    ///< corner residual
   double corner_cauchy_m = 0.1;                ///< Cauchy kernel scale on corner terms [m]; 0 = off, plain least squares (file comment)
   PointToPlaneConfig plane{};                  ///< surface residual
+  SemanticWeightConfig semantic_weights{};     ///< full residual weights (eq. 10-12; default chance-corrected)
   PoseThresholdConfig pose_threshold{};        ///< baseline keyframes
   SemanticAdaptiveConfig semantic_keyframes{}; ///< full keyframes (eq. 14-22)
   SweepDeskewConfig deskew{};                  ///< motion correction (off: KITTI odometry; on: KITTI raw, distorted drives)
@@ -188,8 +189,8 @@ auto make_baseline_odometry(S segmenter, const PipelineSettings& s) {
 template <Segmenter S>
 auto make_full_odometry(S segmenter, const PipelineSettings& s) {
   return Odometry(std::move(segmenter), NormalConsistency(s.normal),
-                  LoamResiduals{SemanticWeighted<PresetCornerResidual>(preset_corner_residual(s)),
-                                SemanticWeighted<PointToPlane>(PointToPlane(s.plane))},
+                  LoamResiduals{SemanticWeighted<PresetCornerResidual>(preset_corner_residual(s), s.semantic_weights),
+                                SemanticWeighted<PointToPlane>(PointToPlane(s.plane), s.semantic_weights)},
                   SemanticAdaptive(s.semantic_keyframes), s.odometry, SweepDeskew(s.deskew));
 }
 

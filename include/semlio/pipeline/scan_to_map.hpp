@@ -10,6 +10,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <utility>
 
 #include <semlio/concepts.hpp>
@@ -17,6 +18,7 @@
 #include <semlio/features/loam_features.hpp>
 #include <semlio/map/feature_map.hpp>
 #include <semlio/map/feature_terms.hpp>
+#include <semlio/map/label_agreement.hpp>
 #include <semlio/solve/gauss_newton.hpp>
 #include <semlio/solve/normal_equations.hpp>
 
@@ -104,9 +106,23 @@ class ScanToMapProblem {
       corner_assoc_.associate(T_map_scan, corner_matches_);
       surface_assoc_.associate(T_map_scan, surface_matches_);
     }
+    if constexpr (kWeighsLabels) update_label_reliability();
     timings_.associate_ms += ms_since(t0);
     ++timings_.associations;
   }
+
+  /// True when a residual takes the frame's label reliability
+  /// (SemanticWeighted::set_label_reliability).
+  static constexpr bool kWeighsLabels =
+      requires(CornerResidual& r) { r.set_label_reliability(1.0); } ||
+      requires(SurfaceResidual& r) { r.set_label_reliability(1.0); };
+
+  /// Cohen's kappa of the last association's corner labels against their
+  /// map points' (map/label_agreement.hpp), as given to the corner residual;
+  /// NaN when no residual uses it.
+  [[nodiscard]] double corner_label_reliability() const noexcept { return corner_label_reliability_; }
+  /// The same for the surface features.
+  [[nodiscard]] double surface_label_reliability() const noexcept { return surface_label_reliability_; }
 
   /// Adds every valid residual at T_map_scan to eq (eq. 13, squared).
   /// Residuals that can (PreparedResidual) reuse their line / plane fits for
@@ -176,6 +192,25 @@ class ScanToMapProblem {
     }
   }
 
+  // One kappa per feature kind: a segmenter errs most at object boundaries,
+  // which is where corner features lie, so corner labels agree with the map
+  // less often than surface labels do and their disagreement says less about
+  // a match. (A few hundred corners give a thousand or more label pairs.)
+  void update_label_reliability() {
+    LabelAgreement corner_agreement;
+    LabelAgreement surface_agreement;
+    corner_agreement.add(*corners_, corner_matches_, *corner_map_);
+    surface_agreement.add(*surfaces_, surface_matches_, *surface_map_);
+    corner_label_reliability_ = corner_agreement.kappa();
+    surface_label_reliability_ = surface_agreement.kappa();
+    if constexpr (requires(CornerResidual& r) { r.set_label_reliability(1.0); }) {
+      residuals_.corner.set_label_reliability(corner_label_reliability_);
+    }
+    if constexpr (requires(SurfaceResidual& r) { r.set_label_reliability(1.0); }) {
+      residuals_.surface.set_label_reliability(surface_label_reliability_);
+    }
+  }
+
   static std::size_t count_matched(const Correspondences& c) noexcept {
     std::size_t n = 0;
     for (const auto& m : c) n += m.count > 0 ? 1U : 0U;
@@ -196,6 +231,8 @@ class ScanToMapProblem {
   // Per-feature residual fits reused while matches stay (PreparedResidual only).
   mutable ResidualFitCache<detail::ModelOf<CornerResidual>> corner_fits_;
   mutable ResidualFitCache<detail::ModelOf<SurfaceResidual>> surface_fits_;
+  double corner_label_reliability_ = std::numeric_limits<double>::quiet_NaN();
+  double surface_label_reliability_ = std::numeric_limits<double>::quiet_NaN();
   mutable ScanToMapTimings timings_;  // two clock reads per call (~22 ns each on the reference VM), ~10 calls a frame
 };
 

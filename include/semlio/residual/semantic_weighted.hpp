@@ -1,12 +1,29 @@
 #pragma once
 /// \file
 /// SemanticWeighted<R>: the semantic consistency weight of eq. 10-12 on any
-/// residual. w = (number of kept matches whose label equals the feature's) / N
+/// residual. a = (number of kept matches whose label equals the feature's) / N
 /// (METHOD.md); the weighted residual is w * r, so a least-squares solver's
 /// cost holds w^2 ||r||^2 (eq. 13 written with the square every LOAM-family
 /// solver uses). The Jacobian scales by the same constant w.
+///
+/// The paper takes w = a, which trusts every label. A segmenter's labels
+/// (mIoU 0.25-0.5 on real scans) are wrong most often at object boundaries,
+/// so a correct match often disagrees with its map points, and w = a then
+/// re-weights good constraints at random and throws information away. The
+/// default weight is therefore chance-corrected: w = 1 - kappa (1 - a), kappa
+/// the frame's Cohen's kappa between feature labels and matched map labels
+/// (map/label_agreement.hpp; set by the scan-to-map problem after every
+/// association, one for corners and one for surfaces). Exact labels give
+/// kappa near 1 and the paper's weight; labels that agree no better than
+/// chance give kappa 0 and w = 1, the unweighted residual; in between, a
+/// disagreement costs as much as the labels have shown they are worth on
+/// this frame. scripts/label_quality_sweep.sh compares the modes from exact
+/// labels to mIoU 0.2 (docs/label_quality.md).
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
 
 #include <semlio/concepts.hpp>
 #include <semlio/core/labels.hpp>
@@ -26,6 +43,18 @@ inline double semantic_weight(Class label, const MatchedPoints& matches) {
   return static_cast<double>(same) / static_cast<double>(matches.count);
 }
 
+/// How SemanticWeighted turns the agreement a of eq. 10 into a weight.
+enum class SemanticWeightMode : std::uint8_t {
+  kChanceCorrected,  ///< w = 1 - kappa (1 - a), kappa the frame's label reliability (file comment)
+  kPaper,            ///< w = a, eq. 11-12 as written
+  kOff,              ///< w = 1: labels leave the residual alone
+};
+
+/// Settings of SemanticWeighted.
+struct SemanticWeightConfig {
+  SemanticWeightMode mode = SemanticWeightMode::kChanceCorrected;  ///< weight rule (file comment)
+};
+
 /// Residual R with r and J multiplied by the semantic weight (eq. 11-12).
 /// A term with weight 0 stays valid (it is a residual that counts for nothing).
 /// A PreparedResidual when R is one (the weight needs only the labels).
@@ -37,7 +66,31 @@ class SemanticWeighted {
   using Model = detail::ModelOf<R>;
 
   /// Wraps inner.
-  explicit SemanticWeighted(R inner = R{}) : inner_(inner) {}
+  explicit SemanticWeighted(R inner = R{}, SemanticWeightConfig config = {}) : inner_(inner), config_(config) {}
+
+  /// Sets kappa, the chance-corrected agreement of this frame's labels with
+  /// the map's (LabelAgreement::kappa(), clamped to [0, 1]; NaN counts as 0).
+  /// Until it is set, kappa is 1: the paper's weight.
+  void set_label_reliability(double kappa) noexcept {
+    reliability_ = std::isfinite(kappa) ? std::clamp(kappa, 0.0, 1.0) : 0.0;
+  }
+  /// The kappa in use (1 until set_label_reliability()).
+  [[nodiscard]] double label_reliability() const noexcept { return reliability_; }
+  /// The settings.
+  [[nodiscard]] const SemanticWeightConfig& config() const noexcept { return config_; }
+
+  /// The weight of a feature whose matches agree with its label at rate a.
+  [[nodiscard]] double weight(double a) const noexcept {
+    switch (config_.mode) {
+      case SemanticWeightMode::kPaper:
+        return a;
+      case SemanticWeightMode::kOff:
+        return 1.0;
+      case SemanticWeightMode::kChanceCorrected:
+        break;
+    }
+    return 1.0 - reliability_ * (1.0 - a);
+  }
 
   /// inner's term with r <- w r and J <- w J.
   [[nodiscard]] ResidualTerm<kDim> evaluate(const FeaturePoint& feature, const MatchedPoints& matches,
@@ -71,16 +124,18 @@ class SemanticWeighted {
   [[nodiscard]] const R& inner() const noexcept { return inner_; }
 
  private:
-  static ResidualTerm<kDim> weighted(const FeaturePoint& feature, const MatchedPoints& matches,
-                                     ResidualTerm<kDim> term) {
+  ResidualTerm<kDim> weighted(const FeaturePoint& feature, const MatchedPoints& matches,
+                              ResidualTerm<kDim> term) const {
     if (!term.valid) return term;
-    const double w = semantic_weight(feature.label, matches);
+    const double w = weight(semantic_weight(feature.label, matches));
     term.r *= w;
     term.J_r_xi *= w;
     return term;
   }
 
   R inner_;
+  SemanticWeightConfig config_;
+  double reliability_ = 1.0;  // kappa; 1 = trust the labels (the paper)
 };
 
 static_assert(Residual<SemanticWeighted<PointToPlane>>);
