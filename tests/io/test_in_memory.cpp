@@ -8,6 +8,7 @@
 #include <semlio/io/detail/text.hpp>
 #include <semlio/io/g2o.hpp>
 #include <semlio/io/kitti.hpp>
+#include <semlio/io/kitti_raw.hpp>
 #include <semlio/io/oxts.hpp>
 #include <semlio/io/pcd.hpp>
 #include <semlio/io/ply.hpp>
@@ -252,6 +253,27 @@ TEST_CASE("parse_g2o equals read_g2o, format_g2o equals write_g2o", "[io][memory
   }
   using Catch::Matchers::Contains;
   CHECK_THROWS_WITH(io::parse_g2o("VERTEX_SE2 0 1 2\n", "mem.g2o"), Contains("mem.g2o:1"));
+}
+
+TEST_CASE("parse_kitti_raw_calib / parse_raw_stamp_lines equal the path readers on drive 0009", "[io][memory]") {
+  const std::string date = semlio_test::data_path("kitti_raw/2011_09_26/");
+  for (const char* name : {"calib_velo_to_cam.txt", "calib_imu_to_velo.txt"}) {
+    const semlio::SE3d a = io::read_kitti_raw_calib(date + name);
+    const semlio::SE3d b = io::parse_kitti_raw_calib(bytes_of(date + name), "mem_calib.txt");
+    CHECK(a.matrix() == b.matrix());
+    CHECK(a.translation().norm() > 0.0);
+  }
+  const std::string stamps = date + "2011_09_26_drive_0009_sync/velodyne_points/timestamps.txt";
+  const auto a = io::detail::read_raw_stamp_lines(stamps);
+  const auto b = io::detail::parse_raw_stamp_lines(bytes_of(stamps), "mem_stamps.txt");
+  REQUIRE(a.size() > 180);
+  CHECK(a == b);
+  CHECK(!a[177].has_value());  // line 178: a sweep the recorder dropped (see kitti_raw.hpp)
+  using Catch::Matchers::Contains;
+  CHECK_THROWS_WITH(io::parse_kitti_raw_calib("R: 1 0 0 0 1 0 0 0 1\n", "mem_calib.txt"),
+                    Contains("mem_calib.txt") && Contains("no 'T:' line"));
+  CHECK_THROWS_WITH(io::detail::parse_raw_stamp_lines("2011-09-26 13:08:43.0\n2011-09-26 13:08:42.0\n", "mem.txt"),
+                    Contains("mem.txt:2"));
 }
 
 }  // namespace test_in_memory
