@@ -236,6 +236,21 @@ TEST_CASE("pointcloud2: the earliest point need not be the first one", "[io][poi
   CHECK(*std::min_element(s.times_s.begin(), s.times_s.end()) == 0.0F);
 }
 
+TEST_CASE("pointcloud2: a point time far from the reference is a FormatError, not an infinite time",
+          "[io][pointcloud2]") {
+  // Found by fuzzing (tests/fuzz/crashes/ros1_pointcloud2): an absolute
+  // float64 timestamp of 4.3e96 s gave a time offset beyond float's range,
+  // an infinite Scan::times_s.
+  CloudWriter w = velodyne_cloud(50);
+  w.put(0, 7, "time", 3e38F);  // float32 relative seconds, finite
+  CHECK_THROWS_AS(pointcloud2_to_scan(w.msg), FormatError);
+  CHECK_THROWS_WITH(pointcloud2_to_scan(w.msg), Catch::Contains("at point 7") && Catch::Contains("limit"));
+  w.put(0, 7, "time", static_cast<float>(semlio::io::kMaxPointTimeOffset_s / 2));  // within the limit
+  const Scan s = pointcloud2_to_scan(w.msg);
+  CHECK(s.size() == 50);
+  for (const float t : s.times_s) CHECK(std::isfinite(t));
+}
+
 TEST_CASE("pointcloud2: Robosense uint8 intensity, uint16 ring, float64 absolute timestamp", "[io][pointcloud2]") {
   const std::uint32_t n = 64;
   CloudWriter w(1, n, 32, 0,
