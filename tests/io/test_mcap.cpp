@@ -653,7 +653,7 @@ TEST_CASE("MCAP: not an MCAP file, a missing file, truncated and damaged files g
   }
 }
 
-TEST_CASE("MCAP: from_bytes reads a file held in memory like its path; errors name the given name",
+TEST_CASE("MCAP: from_bytes reads a file held in memory like its path, errors name the given name",
           "[io][bags][mcap]") {
   for (const char* rel : {"bags/kitti3_zstd.mcap", "bags/small_lz4.mcap", "bags/small_unchunked.mcap"}) {
     INFO(rel);

@@ -482,7 +482,7 @@ TEST_CASE("rosbag1: truncated and randomly damaged copies fail with semlio error
   CHECK(failed > 10);
 }
 
-TEST_CASE("rosbag1: from_bytes reads a file held in memory like its path; errors name the given name",
+TEST_CASE("rosbag1: from_bytes reads a file held in memory like its path, errors name the given name",
           "[io][rosbag1]") {
   for (const char* rel : {"bags/kitti3_lz4.bag", "bags/quirks_bz2.bag", "bags/quirks_lz4_unindexed.bag"}) {
     INFO(rel);
