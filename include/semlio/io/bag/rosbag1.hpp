@@ -314,6 +314,12 @@ class RosBag1Reader {
       throw FormatError(what + ": header length " + std::to_string(hlen) + " is not plausible (limit " +
                         std::to_string(detail::rosbag1::kMaxHeaderBytes) + ")");
     }
+    // Checked before the buffer grows: a lying length in a tiny file must not
+    // cost a 16 MiB allocation (pos + 4 <= file_size_ after the read above).
+    if (hlen > file_size_ - (pos + 4)) {
+      throw FormatError(what + ": header of " + std::to_string(hlen) + " bytes at byte " + std::to_string(pos + 4) +
+                        " runs beyond the end of the " + std::to_string(file_size_) + "-byte file (truncated?)");
+    }
     scratch_.resize(hlen);
     read_at(pos + 4, hlen, scratch_.data(), what);
     r.header = detail::rosbag1::parse_fields(scratch_.data(), hlen, what);
