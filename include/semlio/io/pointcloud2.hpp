@@ -280,7 +280,10 @@ inline PointTimeMode auto_time_mode(const PointCloud2Msg& msg, const std::uint8_
   // float64: absolute when the largest finite value exceeds 1e6 (relative
   // sweep times are below a second; epoch stamps are ~1.7e9 s or ~1.7e18 ns).
   double largest = 0.0;
-  for (std::size_t r = 0; r < msg.height; ++r) {
+  // Width 0: no points, whatever the height says (up to 2^32 - 1 empty rows
+  // to walk, and rows validate() did not check against the data).
+  const std::size_t rows = msg.width == 0 ? 0 : msg.height;
+  for (std::size_t r = 0; r < rows; ++r) {
     const std::uint8_t* row = data + r * std::size_t{msg.row_step};
     for (std::size_t c = 0; c < msg.width; ++c) {
       const double v = load<double>(row + c * std::size_t{msg.point_step} + t.offset, swap);
@@ -473,7 +476,10 @@ inline void pointcloud2_data_to_scan(const PointCloud2Msg& msg, const std::uint8
       loop.template operator()<Coord, Swap, 1>();
     }
   };
-  if (xyz[0].type == 8) {
+  // An empty cloud skips the loop: with width 0 its height may still be
+  // 2^32 - 1 (a corrupt message), rows of nothing to walk for seconds.
+  if (n == 0) {
+  } else if (xyz[0].type == 8) {
     if (swap) {
       by_intensity.template operator()<double, true>();
     } else {
