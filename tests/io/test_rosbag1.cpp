@@ -511,4 +511,24 @@ TEST_CASE("rosbag1: from_bytes reads a file held in memory like its path, errors
   CHECK_THROWS_AS(RosBag1Reader::from_bytes("", "mem_name"), semlio::FormatError);
 }
 
+TEST_CASE("rosbag1: a chunk stating more bytes than its LZ4 / zstd data can expand to is a FormatError",
+          "[io][rosbag1]") {
+  // 64 compressed bytes expand to at most 64 * 255 (+ 128 KiB) with LZ4 and
+  // 64 * 32768 (+ 128 KiB) with zstd: a larger stated size is refused before
+  // the output buffer is allocated.
+  const std::vector<std::uint8_t> in(64, 0);
+  std::vector<std::uint8_t> out;
+  CHECK_THROWS_WITH(semlio::io::detail::decompress_lz4_frame(in.data(), in.size(), 64 * 255 + (1 << 17) + 1, out,
+                                                             "chunk"),
+                    Catch::Contains("more than 64 bytes of LZ4 can hold"));
+  CHECK(out.empty());
+  CHECK_THROWS_WITH(
+      semlio::io::detail::decompress_zstd(in.data(), in.size(), 64 * 32768 + (1 << 17) + 1, out, "chunk"),
+      Catch::Contains("more than 64 bytes of zstd can hold"));
+  CHECK(out.empty());
+  // Within the bound the data itself decides (64 zero bytes are no LZ4 frame).
+  CHECK_THROWS_WITH(semlio::io::detail::decompress_lz4_frame(in.data(), in.size(), 1000, out, "chunk"),
+                    Catch::Contains("LZ4 data is corrupt"));
+}
+
 }  // namespace test_rosbag1

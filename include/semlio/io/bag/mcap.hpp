@@ -700,6 +700,7 @@ class McapReader {
       // As detail::decompress_zstd, with one decompression context kept for
       // the reader's life instead of one allocated per chunk.
       detail::check_chunk_size(uncompressed_size, what);
+      detail::check_expansion(in_size, uncompressed_size, detail::kMaxZstdRatio, "zstd", what);
       if (!zstd_) zstd_.reset(ZSTD_createDCtx());
       if (!zstd_) throw FormatError(what + ": cannot create a zstd decompression context");
       out.resize(static_cast<std::size_t>(uncompressed_size));
