@@ -1,7 +1,8 @@
 #pragma once
 // Shared pieces of the fuzz harnesses (tests/fuzz/harnesses.hpp): the
 // invariant check that traps, and a per-process scratch directory for the
-// readers that take a path.
+// one harness whose reader takes only a path (the YAML settings loader; every
+// reader of include/semlio/io has an in-memory entry point the harnesses use).
 //
 // The harness bodies run both under libFuzzer (scripts/fuzz.sh, clang with
 // -fsanitize=fuzzer,address,undefined) and in the regular GCC test build
@@ -27,18 +28,23 @@ inline void check(bool invariant_holds) {
   if (!invariant_holds) __builtin_trap();
 }
 
-/// A scratch directory private to this process (/tmp/semlio_fuzz_<pid>),
+/// Where scratch directories go: /dev/shm when it exists (tmpfs: a file
+/// written per execution costs no disk I/O), else the system temp directory.
+inline std::filesystem::path scratch_root() {
+  std::error_code ec;
+  if (std::filesystem::is_directory("/dev/shm", ec)) return "/dev/shm";
+  return std::filesystem::temp_directory_path();
+}
+
+/// A scratch directory private to this process (<scratch_root>/semlio_fuzz_<pid>),
 /// created on first use and removed at exit.
 inline const std::filesystem::path& scratch_dir() {
   static const std::filesystem::path dir = [] {
-    const std::filesystem::path d =
-        std::filesystem::temp_directory_path() / ("semlio_fuzz_" + std::to_string(::getpid()));
+    const std::filesystem::path d = scratch_root() / ("semlio_fuzz_" + std::to_string(::getpid()));
     std::filesystem::create_directories(d);
     std::atexit([] {
       std::error_code ec;
-      std::filesystem::remove_all(std::filesystem::temp_directory_path() /
-                                      ("semlio_fuzz_" + std::to_string(::getpid())),
-                                  ec);
+      std::filesystem::remove_all(scratch_root() / ("semlio_fuzz_" + std::to_string(::getpid())), ec);
     });
     return d;
   }();

@@ -168,3 +168,12 @@ put("settings_yaml", "deskew.yaml", "deskew:\n  mode: constant_velocity\n  sweep
     "  start_azimuth_deg: 180\n  direction: clockwise\n  target: middle\n")
 put("settings_yaml", "flow.yaml", "{nearest: {k: 5, max_distance_m: 1.0}, normal: {keep: 5, candidates: 15}}\n")
 put("settings_yaml", "null_key.yaml", "? :")
+
+# KITTI raw calibration files and velodyne timestamps (drive 0009: lines
+# 175-183 hold the recorder's blank lines for dropped sweeps).
+RAW = "kitti_raw/2011_09_26/"
+put("kitti_raw_calib", "calib_velo_to_cam.txt", read(RAW + "calib_velo_to_cam.txt"))
+put("kitti_raw_calib", "calib_imu_to_velo.txt", read(RAW + "calib_imu_to_velo.txt"))
+stamps = read(RAW + "2011_09_26_drive_0009_sync/velodyne_points/timestamps.txt").splitlines(keepends=True)
+put("kitti_raw_stamps", "first8.txt", b"".join(stamps[:8]))
+put("kitti_raw_stamps", "dropped_174-183.txt", b"".join(stamps[174:183]))

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -236,6 +237,21 @@ TEST_CASE("pointcloud2: the earliest point need not be the first one", "[io][poi
   CHECK(*std::min_element(s.times_s.begin(), s.times_s.end()) == 0.0F);
 }
 
+TEST_CASE("pointcloud2: a point time far from the reference is a FormatError, not an infinite time",
+          "[io][pointcloud2]") {
+  // Found by fuzzing (tests/fuzz/crashes/ros1_pointcloud2): an absolute
+  // float64 timestamp of 4.3e96 s gave a time offset beyond float's range,
+  // an infinite Scan::times_s.
+  CloudWriter w = velodyne_cloud(50);
+  w.put(0, 7, "time", 3e38F);  // float32 relative seconds, finite
+  CHECK_THROWS_AS(pointcloud2_to_scan(w.msg), FormatError);
+  CHECK_THROWS_WITH(pointcloud2_to_scan(w.msg), Catch::Contains("at point 7") && Catch::Contains("limit"));
+  w.put(0, 7, "time", static_cast<float>(semlio::io::kMaxPointTimeOffset_s / 2));  // within the limit
+  const Scan s = pointcloud2_to_scan(w.msg);
+  CHECK(s.size() == 50);
+  for (const float t : s.times_s) CHECK(std::isfinite(t));
+}
+
 TEST_CASE("pointcloud2: Robosense uint8 intensity, uint16 ring, float64 absolute timestamp", "[io][pointcloud2]") {
   const std::uint32_t n = 64;
   CloudWriter w(1, n, 32, 0,
@@ -383,6 +399,14 @@ TEST_CASE("pointcloud2: zero points can be kept, an empty cloud is an empty scan
   const Scan e = pointcloud2_to_scan(empty.msg);
   CHECK(e.empty());
   CHECK(e.stamp_s == empty.msg.stamp_s);
+  // Found by fuzzing: width 0 with height 2^32 - 1 (no points, no data) made
+  // the decoder walk four billion empty rows. It is an empty scan at once.
+  CloudWriter tall(0, 0, 16, 0,
+                   {field("x", 0, kF32), field("y", 4, kF32), field("z", 8, kF32), field("time", 8, kF64)});
+  tall.msg.height = 0xFFFFFFFFU;
+  const auto start = std::chrono::steady_clock::now();
+  CHECK(pointcloud2_to_scan(tall.msg).empty());
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::milliseconds(100));
 }
 
 TEST_CASE("pointcloud2: inconsistent messages are FormatErrors naming the problem", "[io][pointcloud2]") {

@@ -482,4 +482,53 @@ TEST_CASE("rosbag1: truncated and randomly damaged copies fail with semlio error
   CHECK(failed > 10);
 }
 
+TEST_CASE("rosbag1: from_bytes reads a file held in memory like its path, errors name the given name",
+          "[io][rosbag1]") {
+  for (const char* rel : {"bags/kitti3_lz4.bag", "bags/quirks_bz2.bag", "bags/quirks_lz4_unindexed.bag"}) {
+    INFO(rel);
+    const std::string path = data_path(rel);
+    RosBag1Reader by_path(path);
+    RosBag1Reader in_memory = RosBag1Reader::from_bytes(semlio_test::read_bytes(path), "mem");
+    REQUIRE(in_memory.topics().size() == by_path.topics().size());
+    for (std::size_t i = 0; i < by_path.topics().size(); ++i) {
+      CHECK(in_memory.topics()[i].name == by_path.topics()[i].name);
+      CHECK(in_memory.topics()[i].message_count == by_path.topics()[i].message_count);
+    }
+    BagMessage a;
+    BagMessage b;
+    std::size_t n = 0;
+    while (by_path.next(a)) {
+      REQUIRE(in_memory.next(b));
+      CHECK(b.topic == a.topic);
+      CHECK(b.log_time_ns == a.log_time_ns);
+      CHECK(b.data == a.data);
+      ++n;
+    }
+    CHECK(!in_memory.next(b));
+    CHECK(n >= 5);
+  }
+  CHECK_THROWS_WITH(RosBag1Reader::from_bytes("not a bag at all, just text", "mem_name"), Catch::Contains("mem_name"));
+  CHECK_THROWS_AS(RosBag1Reader::from_bytes("", "mem_name"), semlio::FormatError);
+}
+
+TEST_CASE("rosbag1: a chunk stating more bytes than its LZ4 / zstd data can expand to is a FormatError",
+          "[io][rosbag1]") {
+  // 64 compressed bytes expand to at most 64 * 255 (+ 128 KiB) with LZ4 and
+  // 64 * 32768 (+ 128 KiB) with zstd: a larger stated size is refused before
+  // the output buffer is allocated.
+  const std::vector<std::uint8_t> in(64, 0);
+  std::vector<std::uint8_t> out;
+  CHECK_THROWS_WITH(semlio::io::detail::decompress_lz4_frame(in.data(), in.size(), 64 * 255 + (1 << 17) + 1, out,
+                                                             "chunk"),
+                    Catch::Contains("more than 64 bytes of LZ4 can hold"));
+  CHECK(out.empty());
+  CHECK_THROWS_WITH(
+      semlio::io::detail::decompress_zstd(in.data(), in.size(), 64 * 32768 + (1 << 17) + 1, out, "chunk"),
+      Catch::Contains("more than 64 bytes of zstd can hold"));
+  CHECK(out.empty());
+  // Within the bound the data itself decides (64 zero bytes are no LZ4 frame).
+  CHECK_THROWS_WITH(semlio::io::detail::decompress_lz4_frame(in.data(), in.size(), 1000, out, "chunk"),
+                    Catch::Contains("LZ4 data is corrupt"));
+}
+
 }  // namespace test_rosbag1

@@ -226,4 +226,48 @@ TEST_CASE("rosbag2 sqlite3: topics of another serialization format are not liste
   CHECK(all[0].data == std::vector<std::uint8_t>{0x00, 0x01, 0x00, 0x00});
 }
 
+TEST_CASE("rosbag2 sqlite3: rows out of timestamp order are a FormatError, not a time going back",
+          "[io][bags][sqlite]") {
+  // Found by fuzzing (tests/fuzz/crashes/sqlite_bag): a corrupt timestamp
+  // index returned a row out of order. The same happens without corruption
+  // when a timestamp is not an integer: SQLite sorts text after every number.
+  semlio_test::CloudTempDir dir("sqlite_order");
+  const std::string db = dir.file("text_stamp.db3");
+  make_db(db,
+          "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,"
+          " serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);"
+          "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL,"
+          " data BLOB NOT NULL);"
+          "INSERT INTO topics VALUES (1, '/cdr', 'std_msgs/msg/String', 'cdr', '');"
+          "INSERT INTO messages VALUES (1, 1, 7, x'00010000');"
+          "INSERT INTO messages VALUES (2, 1, '3 ns', x'00010000');");
+  SqliteBagReader reader(db);
+  BagMessage m;
+  REQUIRE(reader.next(m));
+  CHECK(m.log_time_ns == 7);
+  CHECK_THROWS_WITH(reader.next(m), Catch::Contains("text_stamp.db3") && Catch::Contains("timestamp order"));
+}
+
+TEST_CASE("rosbag2 sqlite3: from_bytes reads a .db3 held in memory like its path", "[io][bags][sqlite]") {
+  const std::string path = kBag + "/ros2_sqlite_0.db3";
+  SqliteBagReader by_path(path);
+  SqliteBagReader in_memory = SqliteBagReader::from_bytes(semlio_test::read_bytes(path), "mem.db3");
+  REQUIRE(in_memory.topics().size() == by_path.topics().size());
+  for (std::size_t i = 0; i < by_path.topics().size(); ++i) {
+    CHECK(in_memory.topics()[i].name == by_path.topics()[i].name);
+    CHECK(in_memory.topics()[i].message_count == by_path.topics()[i].message_count);
+  }
+  const std::vector<BagMessage> a = read_all(by_path);
+  const std::vector<BagMessage> b = read_all(in_memory);
+  REQUIRE(a.size() == 11);  // 2 + 7 + 2 messages on its three topics (counted with the sqlite3 shell)
+  REQUIRE(b.size() == a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    CHECK(b[i].topic == a[i].topic);
+    CHECK(b[i].log_time_ns == a[i].log_time_ns);
+    CHECK(b[i].data == a[i].data);
+  }
+  CHECK_THROWS_WITH(SqliteBagReader::from_bytes("not a database", "mem.db3"), Catch::Contains("mem.db3"));
+  CHECK_THROWS_AS(SqliteBagReader::from_bytes("", "empty.db3"), semlio::FormatError);
+}
+
 }  // namespace test_sqlite_bag

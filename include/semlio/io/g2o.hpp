@@ -198,13 +198,11 @@ inline std::string format_double(double v) {
 
 }  // namespace detail
 
-/// Reads a g2o file. Throws IoError (cannot open) or FormatError (path:line:
-/// wrong field count, non-number, non-unit quaternion, mixed 2D/3D, duplicate
-/// vertex id, edge to an unknown vertex, bad information in strict mode).
-inline G2oGraph read_g2o(const std::string& path, const G2oReadConfig& config = {}) {
-  // Whole-file read: regular files only, bounded (a FIFO or device is an
-  // IoError instead of a hang or an unbounded read).
-  const std::string text = detail::read_file(path);
+/// Parses g2o text already in memory (`path` names it in error messages).
+/// Throws FormatError (path:line: wrong field count, non-number, non-unit
+/// quaternion, mixed 2D/3D, duplicate vertex id, edge to an unknown vertex,
+/// bad information in strict mode).
+inline G2oGraph parse_g2o(std::string_view text, const std::string& path, const G2oReadConfig& config = {}) {
   G2oGraph g;
   std::unordered_map<long, long> first_line;     // vertex id -> line, for duplicates
   std::vector<std::pair<long, long>> edge_refs;  // (line, id) to check after reading
@@ -274,10 +272,16 @@ inline G2oGraph read_g2o(const std::string& path, const G2oReadConfig& config = 
   return g;
 }
 
-/// Writes a g2o file (shortest round-trip decimal numbers). Throws IoError.
-inline void write_g2o(const std::string& path, const G2oGraph& g) {
-  std::ofstream out(path);
-  if (!out) throw IoError(semlio::detail::where(path, 0, "cannot open g2o file for writing"));
+/// Reads a g2o file. Throws IoError (cannot open) or the FormatError of
+/// parse_g2o.
+inline G2oGraph read_g2o(const std::string& path, const G2oReadConfig& config = {}) {
+  // Whole-file read: regular files only, bounded (a FIFO or device is an
+  // IoError instead of a hang or an unbounded read).
+  return parse_g2o(detail::read_file(path), path, config);
+}
+
+/// Writes a g2o graph to a stream (shortest round-trip decimal numbers).
+inline void write_g2o(std::ostream& out, const G2oGraph& g) {
   const auto f = detail::format_double;
   auto info = [&](const auto& M) {
     for (int r = 0; r < M.rows(); ++r) {
@@ -316,7 +320,21 @@ inline void write_g2o(const std::string& path, const G2oGraph& g) {
     info(e.information);
     out << '\n';
   }
+}
+
+/// Writes a g2o file (shortest round-trip decimal numbers). Throws IoError.
+inline void write_g2o(const std::string& path, const G2oGraph& g) {
+  std::ofstream out(path);
+  if (!out) throw IoError(semlio::detail::where(path, 0, "cannot open g2o file for writing"));
+  write_g2o(out, g);
   if (!out) throw IoError(semlio::detail::where(path, 0, "write failed"));
+}
+
+/// The text of a g2o graph (what write_g2o writes).
+inline std::string format_g2o(const G2oGraph& g) {
+  std::ostringstream out;
+  write_g2o(out, g);
+  return out.str();
 }
 
 }  // namespace semlio::io

@@ -60,15 +60,14 @@
 
 namespace semlio::io {
 
-/// Reads a KITTI raw calibration file (`calib_imu_to_velo.txt`,
-/// `calib_velo_to_cam.txt`): lines `key: values`; `R` (9 numbers, row-major)
-/// and `T` (3 numbers) are required once each, other keys (`calib_time`,
-/// `delta_f`, ...) are ignored. Returns T_to_from (calib_imu_to_velo gives
-/// T_velo_imu). Throws IoError (missing), FormatError (line without ':', R/T
-/// missing, repeated or of the wrong count, non-numeric value) and ValueError
-/// (NaN/Inf, rotation not orthonormal), naming path and line.
-inline SE3d read_kitti_raw_calib(const std::string& path) {
-  const std::string text = detail::read_file(path);
+/// Parses the text of a KITTI raw calibration file already in memory (`path`
+/// names it in error messages): lines `key: values`; `R` (9 numbers,
+/// row-major) and `T` (3 numbers) are required once each, other keys
+/// (`calib_time`, `delta_f`, ...) are ignored. Returns T_to_from
+/// (calib_imu_to_velo gives T_velo_imu). Throws FormatError (line without
+/// ':', R/T missing, repeated or of the wrong count, non-numeric value) and
+/// ValueError (NaN/Inf, rotation not orthonormal), naming path and line.
+inline SE3d parse_kitti_raw_calib(std::string_view text, const std::string& path) {
   double v[12] = {};
   long r_line = 0;
   long t_line = 0;
@@ -113,14 +112,20 @@ inline SE3d read_kitti_raw_calib(const std::string& path) {
   return detail::pose_from_3x4(v, path, r_line, "calibration [R|T]");
 }
 
+/// Reads a KITTI raw calibration file (`calib_imu_to_velo.txt`,
+/// `calib_velo_to_cam.txt`); see parse_kitti_raw_calib for the rules and
+/// errors, plus IoError when the file is missing or unreadable.
+inline SE3d read_kitti_raw_calib(const std::string& path) {
+  return parse_kitti_raw_calib(detail::read_file(path), path);
+}
+
 namespace detail {
 
-/// One stamp per line of a KITTI raw timestamps file; nullopt for a blank
-/// line (a sweep or packet the recorder dropped). Throws IoError (missing),
-/// FormatError (no lines, malformed date-time) and ValueError (a stamp
-/// earlier than the previous one), naming path and line.
-inline std::vector<std::optional<double>> read_raw_stamp_lines(const std::string& path) {
-  const std::string text = read_file(path);
+/// One stamp per line of the text of a KITTI raw timestamps file (`path`
+/// names it in error messages); nullopt for a blank line (a sweep or packet
+/// the recorder dropped). Throws FormatError (no lines, malformed date-time)
+/// and ValueError (a stamp earlier than the previous one), naming path and line.
+inline std::vector<std::optional<double>> parse_raw_stamp_lines(std::string_view text, const std::string& path) {
   std::vector<std::optional<double>> out;
   std::optional<double> last;
   long last_line = 0;
@@ -141,6 +146,11 @@ inline std::vector<std::optional<double>> read_raw_stamp_lines(const std::string
   });
   if (out.empty()) throw FormatError(where(path, 0, "empty timestamps file"));
   return out;
+}
+
+/// parse_raw_stamp_lines of a file; IoError when it is missing or unreadable.
+inline std::vector<std::optional<double>> read_raw_stamp_lines(const std::string& path) {
+  return parse_raw_stamp_lines(read_file(path), path);
 }
 
 /// Files `<digits><ext>` of a directory by number. Other extensions are
@@ -412,16 +422,8 @@ class KittiRawDrive {
     const std::string path = packet_path(k);
     if (oxts_stems_.count(k) == 0)
       throw IoError(detail::where(path, 0, "OXTS packet " + std::to_string(k) + " is missing"));
-    const std::string body = detail::read_file(path);
     OxtsRecord rec;
-    long data_line = 0;
-    detail::for_each_line(body, [&](long line, std::string_view s) {
-      if (detail::is_blank(s)) return;
-      if (data_line != 0) throw FormatError(detail::where(path, line, "more than one OXTS line"));
-      data_line = line;
-      parse_oxts_line(s, path, line, rec);
-    });
-    if (data_line == 0) throw FormatError(detail::where(path, 0, "empty OXTS data file"));
+    parse_oxts_data(detail::read_file(path), path, rec);
     return rec;
   }
 

@@ -233,6 +233,65 @@ inline void append_oxts_line(std::string& out, const OxtsRecord& rec) {
   }
 }
 
+/// Parses the text of an OXTS `timestamps.txt` already in memory (`path`
+/// names it in error messages): one `YYYY-MM-DD HH:MM:SS.fraction` per line.
+/// Throws FormatError (empty, blank line between timestamps, malformed
+/// timestamp) and ValueError (time going backwards; equal times are
+/// accepted), naming path and line.
+inline std::vector<double> parse_oxts_timestamps(std::string_view text, const std::string& path) {
+  std::vector<double> stamps;
+  detail::for_each_record(text, path, "timestamps", [&](long line, std::string_view s, const auto&) {
+    const double t = parse_oxts_timestamp(s, path, line);
+    if (!stamps.empty() && t < stamps.back()) {
+      throw ValueError(detail::where(path, line, "timestamp '" + std::string(detail::trim(s)) + "' goes backwards"));
+    }
+    stamps.push_back(t);
+  });
+  if (stamps.empty()) throw FormatError(detail::where(path, 0, "empty timestamps file"));
+  return stamps;
+}
+
+/// Parses the text of one OXTS data file (`data/NNNNNNNNNN.txt`, one line of
+/// 30 fields; blank lines allowed) into `rec` (stamp untouched). Throws
+/// FormatError (empty, more than one line, and parse_oxts_line's errors) and
+/// ValueError (NaN/Inf), naming path and line.
+inline void parse_oxts_data(std::string_view text, const std::string& path, OxtsRecord& rec) {
+  long data_line = 0;
+  detail::for_each_line(text, [&](long line, std::string_view s) {
+    if (detail::is_blank(s)) return;
+    if (data_line != 0) throw FormatError(detail::where(path, line, "more than one OXTS line"));
+    data_line = line;
+    parse_oxts_line(s, path, line, rec);
+  });
+  if (data_line == 0) throw FormatError(detail::where(path, 0, "empty OXTS data file"));
+}
+
+/// Parses a KITTI raw `oxts` directory already in memory: the text of
+/// `timestamps.txt` and of each `data/NNNNNNNNNN.txt` in index order
+/// (`oxts_dir` names them in error messages). Throws FormatError (the data
+/// file count differing from the timestamp count, and the errors of
+/// parse_oxts_timestamps and parse_oxts_data) and ValueError.
+inline std::vector<OxtsRecord> parse_oxts(std::string_view timestamps_text,
+                                          const std::vector<std::string_view>& data_texts,
+                                          const std::string& oxts_dir) {
+  namespace fs = std::filesystem;
+  const std::vector<double> stamps =
+      parse_oxts_timestamps(timestamps_text, (fs::path(oxts_dir) / "timestamps.txt").string());
+  if (data_texts.size() != stamps.size()) {
+    throw FormatError(detail::where((fs::path(oxts_dir) / "data").string(), 0,
+                                    "holds " + std::to_string(data_texts.size()) +
+                                        " .txt files but timestamps.txt has " + std::to_string(stamps.size()) +
+                                        " lines"));
+  }
+  std::vector<OxtsRecord> records(stamps.size());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    records[i].stamp_s = stamps[i];
+    parse_oxts_data(data_texts[i], (fs::path(oxts_dir) / "data" / (detail::frame_stem(i, 10) + ".txt")).string(),
+                    records[i]);
+  }
+  return records;
+}
+
 /// Reads a KITTI raw `oxts` directory: `timestamps.txt` and `data/NNNNNNNNNN.txt`
 /// (10-digit, from 0, one per timestamp line). Throws IoError (missing
 /// directory, timestamps or data file), FormatError (empty timestamps, blank
@@ -242,19 +301,7 @@ inline void append_oxts_line(std::string& out, const OxtsRecord& rec) {
 inline std::vector<OxtsRecord> read_oxts(const std::string& oxts_dir) {
   namespace fs = std::filesystem;
   const std::string stamps_path = (fs::path(oxts_dir) / "timestamps.txt").string();
-  const std::string text = detail::read_file(stamps_path);
-  std::vector<OxtsRecord> records;
-  detail::for_each_record(text, stamps_path, "timestamps", [&](long line, std::string_view s, const auto&) {
-    OxtsRecord rec;
-    rec.stamp_s = parse_oxts_timestamp(s, stamps_path, line);
-    if (!records.empty() && rec.stamp_s < records.back().stamp_s) {
-      throw ValueError(
-          detail::where(stamps_path, line, "timestamp '" + std::string(detail::trim(s)) + "' goes backwards"));
-    }
-    records.push_back(rec);
-  });
-  if (records.empty()) throw FormatError(detail::where(stamps_path, 0, "empty timestamps file"));
-
+  const std::vector<double> stamps = parse_oxts_timestamps(detail::read_file(stamps_path), stamps_path);
   const fs::path data_dir = fs::path(oxts_dir) / "data";
   std::error_code ec;
   if (!fs::is_directory(data_dir, ec)) {
@@ -265,24 +312,29 @@ inline std::vector<OxtsRecord> read_oxts(const std::string& oxts_dir) {
     if (entry.path().extension() == ".txt") ++files;
   }
   if (ec) throw IoError(detail::where(data_dir.string(), 0, "cannot list directory: " + ec.message()));
-  if (files != records.size()) {
+  if (files != stamps.size()) {
     throw FormatError(detail::where(data_dir.string(), 0,
                                     "holds " + std::to_string(files) + " .txt files but timestamps.txt has " +
-                                        std::to_string(records.size()) + " lines"));
+                                        std::to_string(stamps.size()) + " lines"));
   }
+  std::vector<OxtsRecord> records(stamps.size());
   for (std::size_t i = 0; i < records.size(); ++i) {
+    records[i].stamp_s = stamps[i];
     const std::string path = (data_dir / (detail::frame_stem(i, 10) + ".txt")).string();
-    const std::string body = detail::read_file(path);  // IoError names a missing index
-    long data_line = 0;
-    detail::for_each_line(body, [&](long line, std::string_view s) {
-      if (detail::is_blank(s)) return;
-      if (data_line != 0) throw FormatError(detail::where(path, line, "more than one OXTS line"));
-      data_line = line;
-      parse_oxts_line(s, path, line, records[i]);
-    });
-    if (data_line == 0) throw FormatError(detail::where(path, 0, "empty OXTS data file"));
+    parse_oxts_data(detail::read_file(path), path, records[i]);  // IoError names a missing index
   }
   return records;
+}
+
+/// The text of an OXTS `timestamps.txt` for `records` (format_oxts_timestamp
+/// per line). Throws ValueError for a stamp outside 1970-9999.
+inline std::string format_oxts_timestamps(const std::vector<OxtsRecord>& records) {
+  std::string stamps;
+  for (const OxtsRecord& r : records) {
+    stamps += format_oxts_timestamp(r.stamp_s);
+    stamps.push_back('\n');
+  }
+  return stamps;
 }
 
 /// Writes a KITTI raw `oxts` directory (created when missing): timestamps.txt
@@ -293,10 +345,8 @@ inline void write_oxts(const std::string& oxts_dir, const std::vector<OxtsRecord
   std::error_code ec;
   fs::create_directories(data_dir, ec);
   if (ec) throw IoError(detail::where(data_dir.string(), 0, "cannot create directory: " + ec.message()));
-  std::string stamps;
+  const std::string stamps = format_oxts_timestamps(records);
   for (std::size_t i = 0; i < records.size(); ++i) {
-    stamps += format_oxts_timestamp(records[i].stamp_s);
-    stamps.push_back('\n');
     std::string line;
     append_oxts_line(line, records[i]);
     line.push_back('\n');

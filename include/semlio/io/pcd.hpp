@@ -353,13 +353,12 @@ inline void read_ascii(const std::string& path, const Header& h, std::string_vie
 
 }  // namespace detail::pcd
 
-/// Reads a PCD v0.7 file (ascii or binary) into a scan in the file's frame.
+/// Parses the bytes of a PCD v0.7 file already in memory (ascii or binary;
+/// `path` names it in error messages) into a scan in the file's frame.
 /// Points with a NaN/Inf coordinate, intensity or time and (0,0,0) points are dropped and added to
-/// `stats` when given (added to, not reset). Throws IoError (missing/unreadable file) or
-/// FormatError naming the path, line and bad value (bad header, a header that
+/// `stats` when given (added to, not reset). Throws FormatError naming the path, line and bad value (bad header, a header that
 /// lies about its point count, truncated payload, binary_compressed).
-inline Scan read_pcd(const std::string& path, ReadStats* stats = nullptr) {
-  const std::string bytes = detail::cloud::read_file_bytes(path);
+inline Scan parse_pcd(std::string_view bytes, const std::string& path, ReadStats* stats = nullptr) {
   const detail::pcd::Header h = detail::pcd::parse_header(path, bytes);
   Scan scan;
   ReadStats local;
@@ -372,13 +371,18 @@ inline Scan read_pcd(const std::string& path, ReadStats* stats = nullptr) {
   return scan;
 }
 
-/// Writes x y z (float32) and, when the scan has them, intensity (float32),
+/// Reads a PCD v0.7 file; see parse_pcd for the rules and errors, plus
+/// IoError when the file is missing, unreadable or larger than
+/// kMaxCloudFileBytes.
+inline Scan read_pcd(const std::string& path, ReadStats* stats = nullptr) {
+  return parse_pcd(detail::cloud::read_file_bytes(path), path, stats);
+}
+
+/// The bytes of a PCD v0.7 file: x y z (float32) and, when the scan has them, intensity (float32),
 /// label (uint32 raw SemanticKITTI id | instance << 16), ring (uint16) and time
 /// (float32 seconds) as PCD v0.7, one row (HEIGHT 1). Ascii floats use the shortest text that reads
-/// back bit-exactly. Throws ValueError for an inconsistent scan, IoError when
-/// the file cannot be written.
-inline void write_pcd(const std::string& path, const Scan& scan,
-                      PcdEncoding encoding = PcdEncoding::kBinary) {
+/// back bit-exactly. Throws ValueError for an inconsistent scan.
+inline std::string format_pcd(const Scan& scan, PcdEncoding encoding = PcdEncoding::kBinary) {
   scan.validate();
   namespace cloud = detail::cloud;
   const bool has_i = scan.has_intensity();
@@ -431,7 +435,13 @@ inline void write_pcd(const std::string& path, const Scan& scan,
       if (has_t) cloud::store(out, scan.times_s[i], kSwap);
     }
   }
-  cloud::write_file_bytes(path, out);
+  return out;
+}
+
+/// Writes a scan as a PCD v0.7 file (format_pcd). Throws ValueError for an
+/// inconsistent scan, IoError when the file cannot be written.
+inline void write_pcd(const std::string& path, const Scan& scan, PcdEncoding encoding = PcdEncoding::kBinary) {
+  detail::cloud::write_file_bytes(path, format_pcd(scan, encoding));
 }
 
 }  // namespace semlio::io

@@ -359,13 +359,13 @@ inline void read_ascii(const std::string& path, const Header& h, const VertexLay
 
 }  // namespace detail::ply
 
-/// Reads the vertices of a PLY file (ascii or binary) into a scan. Points with
+/// Parses the vertices of a PLY file already in memory (ascii or binary;
+/// `path` names it in error messages) into a scan. Points with
 /// a NaN/Inf coordinate, intensity or time and (0,0,0) points are dropped and added to `stats` when
-/// given (added to, not reset). Throws IoError (missing/unreadable file) or FormatError naming the
+/// given (added to, not reset). Throws FormatError naming the
 /// path, line and bad value (bad header, truncated payload, list property in
 /// the vertex element).
-inline Scan read_ply(const std::string& path, ReadStats* stats = nullptr) {
-  const std::string bytes = detail::cloud::read_file_bytes(path);
+inline Scan parse_ply(std::string_view bytes, const std::string& path, ReadStats* stats = nullptr) {
   detail::ply::Header h = detail::ply::parse_header(path, bytes);
   const detail::ply::VertexLayout v = detail::ply::vertex_layout(path, h);
   Scan scan;
@@ -379,13 +379,19 @@ inline Scan read_ply(const std::string& path, ReadStats* stats = nullptr) {
   return scan;
 }
 
-/// Writes a scan as PLY (binary little-endian by default): x y z, and when
+/// Reads the vertices of a PLY file; see parse_ply for the rules and errors,
+/// plus IoError when the file is missing, unreadable or larger than
+/// kMaxCloudFileBytes.
+inline Scan read_ply(const std::string& path, ReadStats* stats = nullptr) {
+  return parse_ply(detail::cloud::read_file_bytes(path), path, stats);
+}
+
+/// The bytes of a scan as PLY (binary little-endian by default): x y z, and when
 /// present intensity (float), ring (ushort), time (float) and `label`
 /// (uint, raw SemanticKITTI id | instance << 16) plus the class colour (uchar
 /// red green blue, SemanticKITTI palette). Throws ValueError for an
-/// inconsistent scan, IoError when the file cannot be written.
-inline void write_ply(const std::string& path, const Scan& scan,
-                      PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian) {
+/// inconsistent scan.
+inline std::string format_ply(const Scan& scan, PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian) {
   scan.validate();
   namespace cloud = detail::cloud;
   const bool has_i = scan.has_intensity();
@@ -448,7 +454,14 @@ inline void write_ply(const std::string& path, const Scan& scan,
       }
     }
   }
-  cloud::write_file_bytes(path, out);
+  return out;
+}
+
+/// Writes a scan as a PLY file (format_ply). Throws ValueError for an
+/// inconsistent scan, IoError when the file cannot be written.
+inline void write_ply(const std::string& path, const Scan& scan,
+                      PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian) {
+  detail::cloud::write_file_bytes(path, format_ply(scan, encoding));
 }
 
 }  // namespace semlio::io

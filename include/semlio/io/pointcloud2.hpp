@@ -34,6 +34,8 @@
 /// field `stamp_s` is the header stamp and `times_s` stays empty. Points
 /// with a non-finite x, y, z (or intensity/time), and points exactly at
 /// (0,0,0), are dropped in every field at once and counted in ReadStats.
+/// A finite time more than kMaxPointTimeOffset_s from the reference (a
+/// corrupt value) is a FormatError.
 
 #include <algorithm>
 #include <bit>
@@ -60,6 +62,12 @@ enum class PointTimeMode : std::uint8_t {
   kAbsoluteSeconds,      ///< seconds since the epoch
   kAbsoluteNanoseconds,  ///< nanoseconds since the epoch
 };
+
+/// Largest |time| of a point relative to the cloud's reference (the header
+/// stamp, or the first kept point's absolute time) [s]. No sweep lasts 11.6
+/// days (the same bound as kAuto's absolute-time rule); a larger offset is a
+/// corrupt value, and would not fit the float Scan::times_s (3.4e38 s).
+inline constexpr double kMaxPointTimeOffset_s = 1e6;
 
 /// Which fields pointcloud2_to_scan() reads; the first present name of each list wins.
 struct PointCloud2Config {
@@ -272,7 +280,10 @@ inline PointTimeMode auto_time_mode(const PointCloud2Msg& msg, const std::uint8_
   // float64: absolute when the largest finite value exceeds 1e6 (relative
   // sweep times are below a second; epoch stamps are ~1.7e9 s or ~1.7e18 ns).
   double largest = 0.0;
-  for (std::size_t r = 0; r < msg.height; ++r) {
+  // Width 0: no points, whatever the height says (up to 2^32 - 1 empty rows
+  // to walk, and rows validate() did not check against the data).
+  const std::size_t rows = msg.width == 0 ? 0 : msg.height;
+  for (std::size_t r = 0; r < rows; ++r) {
     const std::uint8_t* row = data + r * std::size_t{msg.row_step};
     for (std::size_t c = 0; c < msg.width; ++c) {
       const double v = load<double>(row + c * std::size_t{msg.point_step} + t.offset, swap);
@@ -422,6 +433,12 @@ inline void pointcloud2_data_to_scan(const PointCloud2Msg& msg, const std::uint8
           }
           rel = absolute ? v - ref_value : v;
           if (nanoseconds) rel *= 1e-9;
+          if (!(std::abs(rel) <= kMaxPointTimeOffset_s)) {
+            throw FormatError(where(msg, "time field '" + time.name + "' holds " + std::to_string(v) + " at point " +
+                                             std::to_string(r * msg.width + c) + ", " + std::to_string(rel) +
+                                             " s from the cloud's reference time (limit " +
+                                             std::to_string(kMaxPointTimeOffset_s) + " s)"));
+          }
         }
         std::uint16_t ring_value = 0;
         if (ring_type != 0) {
@@ -459,7 +476,10 @@ inline void pointcloud2_data_to_scan(const PointCloud2Msg& msg, const std::uint8
       loop.template operator()<Coord, Swap, 1>();
     }
   };
-  if (xyz[0].type == 8) {
+  // An empty cloud skips the loop: with width 0 its height may still be
+  // 2^32 - 1 (a corrupt message), rows of nothing to walk for seconds.
+  if (n == 0) {
+  } else if (xyz[0].type == 8) {
     if (swap) {
       by_intensity.template operator()<double, true>();
     } else {

@@ -26,13 +26,13 @@
 
 namespace semlio::io {
 
-/// Reads KITTI-format poses: 12 numbers per line (row-major 3x4 [R|t]).
-/// Throws IoError (missing file), FormatError (empty file, wrong field count,
+/// Parses KITTI-format poses from text already in memory (`path` names it in
+/// error messages): 12 numbers per line (row-major 3x4 [R|t]). Throws
+/// FormatError (empty file, wrong field count,
 /// non-numeric field, blank line between poses) and ValueError (NaN/Inf,
 /// rotation off orthonormal by more than kRotationTolerance, reflection), all
 /// naming path and line. Trailing blank lines are allowed.
-inline std::vector<SE3d> read_kitti_poses(const std::string& path) {
-  const std::string text = detail::read_file(path);
+inline std::vector<SE3d> parse_kitti_poses(std::string_view text, const std::string& path) {
   std::vector<SE3d> poses;
   detail::for_each_record(text, path, "poses", [&](long line, std::string_view, const auto& tok) {
     if (tok.size() != 12) {
@@ -47,16 +47,27 @@ inline std::vector<SE3d> read_kitti_poses(const std::string& path) {
   return poses;
 }
 
-/// Writes KITTI-format poses, one 3x4 row-major line per pose, numbers as the
-/// shortest text that reads back exactly. Throws IoError.
-inline void write_kitti_poses(const std::string& path, const std::vector<SE3d>& poses) {
+/// Reads KITTI-format poses; see parse_kitti_poses for the rules and errors,
+/// plus IoError when the file is missing or unreadable.
+inline std::vector<SE3d> read_kitti_poses(const std::string& path) {
+  return parse_kitti_poses(detail::read_file(path), path);
+}
+
+/// The text of KITTI-format poses: one 3x4 row-major line per pose, numbers as
+/// the shortest text that reads back exactly.
+inline std::string format_kitti_poses(const std::vector<SE3d>& poses) {
   std::string out;
   out.reserve(poses.size() * 200);
   for (const SE3d& T : poses) {
     detail::append_3x4(out, T);
     out.push_back('\n');
   }
-  detail::write_file(path, out);
+  return out;
+}
+
+/// Writes KITTI-format poses (format_kitti_poses). Throws IoError.
+inline void write_kitti_poses(const std::string& path, const std::vector<SE3d>& poses) {
+  detail::write_file(path, format_kitti_poses(poses));
 }
 
 /// A pose with its timestamp.
@@ -68,13 +79,13 @@ struct StampedPose {
 /// Largest accepted | |q| - 1 | of a TUM quaternion before normalising it.
 inline constexpr double kQuaternionNormTolerance = 1e-3;
 
-/// Reads a TUM trajectory: `timestamp tx ty tz qx qy qz qw` per line; lines
+/// Parses a TUM trajectory from text already in memory (`path` names it in
+/// error messages): `timestamp tx ty tz qx qy qz qw` per line; lines
 /// starting with '#' and blank lines are skipped. The quaternion is normalised
-/// after checking | |q| - 1 | <= kQuaternionNormTolerance. Throws IoError,
+/// after checking | |q| - 1 | <= kQuaternionNormTolerance. Throws
 /// FormatError (empty, wrong field count, non-numeric) and ValueError (NaN/Inf,
 /// bad quaternion norm, timestamps going backwards), naming path and line.
-inline std::vector<StampedPose> read_tum_trajectory(const std::string& path) {
-  const std::string text = detail::read_file(path);
+inline std::vector<StampedPose> parse_tum_trajectory(std::string_view text, const std::string& path) {
   std::vector<StampedPose> out;
   std::vector<std::string_view> tok;
   detail::for_each_line(text, [&](long line, std::string_view s) {
@@ -111,9 +122,15 @@ inline std::vector<StampedPose> read_tum_trajectory(const std::string& path) {
   return out;
 }
 
-/// Writes a TUM trajectory (`timestamp tx ty tz qx qy qz qw`, qw >= 0), numbers
-/// as the shortest text that reads back exactly. Throws IoError.
-inline void write_tum_trajectory(const std::string& path, const std::vector<StampedPose>& poses) {
+/// Reads a TUM trajectory; see parse_tum_trajectory for the rules and errors,
+/// plus IoError when the file is missing or unreadable.
+inline std::vector<StampedPose> read_tum_trajectory(const std::string& path) {
+  return parse_tum_trajectory(detail::read_file(path), path);
+}
+
+/// The text of a TUM trajectory (`timestamp tx ty tz qx qy qz qw`, qw >= 0),
+/// numbers as the shortest text that reads back exactly.
+inline std::string format_tum_trajectory(const std::vector<StampedPose>& poses) {
   std::string out;
   out.reserve(poses.size() * 160);
   for (const StampedPose& p : poses) {
@@ -127,7 +144,12 @@ inline void write_tum_trajectory(const std::string& path, const std::vector<Stam
     }
     out.push_back('\n');
   }
-  detail::write_file(path, out);
+  return out;
+}
+
+/// Writes a TUM trajectory (format_tum_trajectory). Throws IoError.
+inline void write_tum_trajectory(const std::string& path, const std::vector<StampedPose>& poses) {
+  detail::write_file(path, format_tum_trajectory(poses));
 }
 
 /// True when the first non-blank, non-comment line has 8 fields (TUM); false

@@ -42,6 +42,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -324,6 +325,13 @@ class McapReader {
     select({});
   }
 
+  /// Opens an MCAP file held in memory (copied; `name` stands for the path in
+  /// error messages): the same reader as the path constructor, with reads
+  /// served from the copy. Throws FormatError when it is not a valid MCAP file.
+  static McapReader from_bytes(std::string_view bytes, const std::string& name, const Config& config = {}) {
+    return McapReader(InMemory{}, bytes, name, config);
+  }
+
   /// Topics of the file (one per topic name, in the order of their first channel id).
   [[nodiscard]] const std::vector<BagTopic>& topics() const noexcept { return topics_; }
 
@@ -408,6 +416,14 @@ class McapReader {
     std::vector<std::uint8_t> records;  ///< the chunk's decompressed records
   };
 
+  struct InMemory {};
+  McapReader(InMemory, std::string_view bytes, const std::string& name, const Config& config)
+      : path_(name), config_(config), memory_(bytes), in_memory_(true) {
+    file_size_ = memory_.size();
+    open();
+    select({});
+  }
+
   void push(const detail::mcap::Item& item) {
     heap_.push_back(item);
     std::push_heap(heap_.begin(), heap_.end(), detail::mcap::Later{});
@@ -423,6 +439,15 @@ class McapReader {
 
   /// Reads n bytes at `offset` (already checked against the file size).
   void read_at(std::uint64_t offset, std::size_t n, std::uint8_t* dst, const char* what) {
+    if (in_memory_) {
+      if (offset > memory_.size() || n > memory_.size() - offset) {
+        throw FormatError(path_ + ": " + std::to_string(n) + " bytes of " + what + " at offset " +
+                          std::to_string(offset) + " lie past the end of the " + std::to_string(memory_.size()) +
+                          "-byte file");
+      }
+      if (n != 0) std::memcpy(dst, memory_.data() + offset, n);
+      return;
+    }
     file_.clear();
     file_.seekg(static_cast<std::streamoff>(offset));
     file_.read(reinterpret_cast<char*>(dst), static_cast<std::streamsize>(n));
@@ -675,6 +700,7 @@ class McapReader {
       // As detail::decompress_zstd, with one decompression context kept for
       // the reader's life instead of one allocated per chunk.
       detail::check_chunk_size(uncompressed_size, what);
+      detail::check_expansion(in_size, uncompressed_size, detail::kMaxZstdRatio, "zstd", what);
       if (!zstd_) zstd_.reset(ZSTD_createDCtx());
       if (!zstd_) throw FormatError(what + ": cannot create a zstd decompression context");
       out.resize(static_cast<std::size_t>(uncompressed_size));
@@ -805,6 +831,8 @@ class McapReader {
   std::string path_;
   Config config_;
   std::ifstream file_;
+  std::string memory_;     ///< the whole file when opened with from_bytes
+  bool in_memory_ = false;  ///< reads come from memory_, not file_
   std::uint64_t file_size_ = 0;
   std::map<std::uint16_t, detail::mcap::Channel> channels_;
   std::map<std::uint16_t, std::string> schema_names_;

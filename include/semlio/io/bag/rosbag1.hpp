@@ -206,6 +206,13 @@ class RosBag1Reader {
     select({});
   }
 
+  /// Opens a bag held in memory (copied; `name` stands for the path in error
+  /// messages): the same reader as the path constructor, with reads served
+  /// from the copy. Throws FormatError when it is not a valid bag.
+  static RosBag1Reader from_bytes(std::string_view bytes, const std::string& name) {
+    return RosBag1Reader(InMemory{}, bytes, name);
+  }
+
   /// Topics of the bag, in the order of their first connection id.
   [[nodiscard]] const std::vector<BagTopic>& topics() const noexcept { return topics_; }
 
@@ -258,6 +265,14 @@ class RosBag1Reader {
   [[nodiscard]] const std::string& path() const noexcept { return path_; }
 
  private:
+  struct InMemory {};
+  RosBag1Reader(InMemory, std::string_view bytes, const std::string& name)
+      : path_(name), memory_(bytes), in_memory_(true) {
+    file_size_ = memory_.size();
+    open_index();
+    select({});
+  }
+
   /// A record read from the file: header fields and where its data lies.
   struct FileRecord {
     detail::rosbag1::Fields header;
@@ -279,6 +294,10 @@ class RosBag1Reader {
       throw FormatError(what + ": needs " + std::to_string(n) + " bytes at byte " + std::to_string(pos) +
                         ", beyond the end of the " + std::to_string(file_size_) + "-byte file (truncated?)");
     }
+    if (in_memory_) {
+      if (n != 0) std::memcpy(out, memory_.data() + pos, static_cast<std::size_t>(n));
+      return;
+    }
     file_.clear();
     file_.seekg(static_cast<std::streamoff>(pos));
     file_.read(reinterpret_cast<char*>(out), static_cast<std::streamsize>(n));
@@ -294,6 +313,12 @@ class RosBag1Reader {
     if (hlen > detail::rosbag1::kMaxHeaderBytes) {
       throw FormatError(what + ": header length " + std::to_string(hlen) + " is not plausible (limit " +
                         std::to_string(detail::rosbag1::kMaxHeaderBytes) + ")");
+    }
+    // Checked before the buffer grows: a lying length in a tiny file must not
+    // cost a 16 MiB allocation (pos + 4 <= file_size_ after the read above).
+    if (hlen > file_size_ - (pos + 4)) {
+      throw FormatError(what + ": header of " + std::to_string(hlen) + " bytes at byte " + std::to_string(pos + 4) +
+                        " runs beyond the end of the " + std::to_string(file_size_) + "-byte file (truncated?)");
     }
     scratch_.resize(hlen);
     read_at(pos + 4, hlen, scratch_.data(), what);
@@ -571,6 +596,8 @@ class RosBag1Reader {
 
   std::string path_;
   std::ifstream file_;
+  std::string memory_;     ///< the whole file when opened with from_bytes
+  bool in_memory_ = false;  ///< reads come from memory_, not file_
   std::uint64_t file_size_ = 0;
   std::vector<BagTopic> topics_;
   std::map<std::uint32_t, std::size_t> conn_topic_;  ///< connection id -> topic index

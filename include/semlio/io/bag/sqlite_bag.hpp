@@ -21,7 +21,8 @@
 /// by timestamp, ties in file order. Topics with the same name in several
 /// files are one topic; topics of a serialization format other than "cdr"
 /// are not listed. Errors name the file: IoError when a file cannot be
-/// opened, FormatError when it is not a rosbag2 sqlite3 database.
+/// opened, FormatError when it is not a rosbag2 sqlite3 database (or, from
+/// next(), when a corrupt timestamp index returns rows out of time order).
 /// Thread safety: none (one reader per thread).
 
 #include <sqlite3.h>
@@ -29,11 +30,14 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -103,6 +107,9 @@ struct File {
   std::map<std::int64_t, std::size_t> topic_of_id;  ///< topics.id -> reader topic index (readable topics)
   Stmt stmt;                                        ///< the running SELECT (null: nothing selected here)
   bool has_row = false;                             ///< stmt is on a row not yet handed out
+  /// Timestamp of the row of stmt handed out last: rows must not go back in
+  /// time (a corrupt timestamp index can return them out of order).
+  std::int64_t last_time_ns = std::numeric_limits<std::int64_t>::min();
 };
 
 }  // namespace detail::sqlite_bag
@@ -143,6 +150,18 @@ class SqliteBagReader {
     select({});
   }
 
+  /// Opens one .db3 database held in memory (copied into SQLite's own buffer
+  /// with sqlite3_deserialize, read-only; `name` stands for the path in error
+  /// messages). Throws IoError when SQLite cannot take the bytes, FormatError
+  /// when they are not a rosbag2 sqlite3 database.
+  static SqliteBagReader from_bytes(std::string_view db3_bytes, const std::string& name) {
+    SqliteBagReader r;
+    r.path_ = name;
+    r.open_memory(db3_bytes, name);
+    r.select({});
+    return r;
+  }
+
   /// Topics of the bag (one per name, in the order of the files' topic ids).
   [[nodiscard]] const std::vector<BagTopic>& topics() const noexcept { return topics_; }
 
@@ -162,6 +181,7 @@ class SqliteBagReader {
     for (detail::sqlite_bag::File& f : files_) {
       f.stmt.reset();
       f.has_row = false;
+      f.last_time_ns = std::numeric_limits<std::int64_t>::min();
       std::string ids;
       for (const auto& [id, topic] : f.topic_of_id) {
         if (!want[topic]) continue;
@@ -178,7 +198,8 @@ class SqliteBagReader {
     }
   }
 
-  /// The next selected message in timestamp order (ties in file order); false at the end.
+  /// The next selected message in timestamp order (ties in file order); false
+  /// at the end. Throws FormatError when a file's rows go back in time.
   bool next(BagMessage& out) {
     detail::sqlite_bag::File* best = nullptr;
     std::int64_t best_time = 0;
@@ -191,6 +212,15 @@ class SqliteBagReader {
       }
     }
     if (best == nullptr) return false;
+    // ORDER BY timestamp walks rosbag2's timestamp index: a corrupt index (or
+    // a non-integer timestamp, which SQLite sorts after every integer) yields
+    // rows out of order, which would break the time order promised above.
+    if (best_time < best->last_time_ns) {
+      throw FormatError(best->path + ": message timestamp " + std::to_string(best_time) + " ns comes after " +
+                        std::to_string(best->last_time_ns) +
+                        " ns in timestamp order (a corrupt timestamp index or a non-integer timestamp)");
+    }
+    best->last_time_ns = best_time;
     sqlite3_stmt* s = best->stmt.get();
     const auto topic = best->topic_of_id.find(sqlite3_column_int64(s, 0));
     if (topic == best->topic_of_id.end()) {
@@ -233,6 +263,8 @@ class SqliteBagReader {
     }
   }
 
+  SqliteBagReader() = default;
+
   void open_file(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -245,6 +277,35 @@ class SqliteBagReader {
     if (rc != SQLITE_OK) {
       throw IoError(path + ": cannot open as sqlite3 database: " + (raw != nullptr ? sqlite3_errmsg(raw) : "out of memory"));
     }
+    read_topics(std::move(f));
+  }
+
+  /// An in-memory database: an empty one, replaced by a read-only copy of `bytes`.
+  void open_memory(std::string_view bytes, const std::string& name) {
+    detail::sqlite_bag::File f;
+    f.path = name;
+    sqlite3* raw = nullptr;
+    const int rc = sqlite3_open_v2(":memory:", &raw, SQLITE_OPEN_READWRITE, nullptr);
+    f.db.reset(raw);
+    if (rc != SQLITE_OK) {
+      throw IoError(name + ": cannot open an in-memory sqlite3 database: " +
+                    (raw != nullptr ? sqlite3_errmsg(raw) : "out of memory"));
+    }
+    // SQLite frees the copy when the connection closes (FREEONCLOSE); at
+    // least one byte so that an empty input is a FormatError, not a failed malloc.
+    const auto size = static_cast<sqlite3_int64>(bytes.size());
+    auto* copy = static_cast<unsigned char*>(sqlite3_malloc64(bytes.empty() ? 1U : bytes.size()));
+    if (copy == nullptr) throw IoError(name + ": out of memory copying " + std::to_string(bytes.size()) + " bytes");
+    if (!bytes.empty()) std::memcpy(copy, bytes.data(), bytes.size());
+    if (sqlite3_deserialize(raw, "main", copy, size, size,
+                            SQLITE_DESERIALIZE_FREEONCLOSE | SQLITE_DESERIALIZE_READONLY) != SQLITE_OK) {
+      throw IoError(name + ": sqlite3 cannot load the bytes as a database: " + sqlite3_errmsg(raw));
+    }
+    read_topics(std::move(f));
+  }
+
+  /// Reads the topics (and message counts) of an opened file and adds it.
+  void read_topics(detail::sqlite_bag::File f) {
     // Topics and their message counts (topic_id precedes the blob in each
     // row, so the count does not read the message data).
     std::map<std::int64_t, std::size_t> counts;

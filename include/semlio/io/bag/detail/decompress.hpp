@@ -39,6 +39,28 @@ inline void check_chunk_size(std::uint64_t uncompressed_size, const std::string&
   }
 }
 
+/// Largest expansion of an LZ4 frame: a match length grows by 255 per extra
+/// byte, so no frame decompresses to more than 255 times its size (plus a
+/// block's worth for the headers of tiny frames).
+inline constexpr std::uint64_t kMaxLz4Ratio = 255;
+/// Largest expansion of a zstd frame: an RLE block turns 4 bytes (3-byte
+/// header + the byte) into at most 128 KiB.
+inline constexpr std::uint64_t kMaxZstdRatio = 32768;
+
+/// Rejects a stated uncompressed size that `in_size` compressed bytes of a
+/// codec with expansion at most `max_ratio` cannot produce: a lie in a tiny
+/// file must cost a FormatError, not an allocation (and zero-fill) of up to
+/// kMaxChunkBytes.
+inline void check_expansion(std::uint64_t in_size, std::uint64_t uncompressed_size, std::uint64_t max_ratio,
+                            const char* codec, const std::string& what) {
+  constexpr std::uint64_t kSlack = std::uint64_t{1} << 17;  // one 128 KiB block
+  // in_size <= kMaxChunkBytes (2^31) for the callers' inputs: no overflow.
+  if (in_size <= kMaxChunkBytes && uncompressed_size > in_size * max_ratio + kSlack) {
+    throw FormatError(what + ": chunk states " + std::to_string(uncompressed_size) + " uncompressed bytes, more than " +
+                      std::to_string(in_size) + " bytes of " + codec + " can hold");
+  }
+}
+
 /// bz2 stream `in` into exactly `uncompressed_size` bytes of `out`.
 inline void decompress_bz2(const std::uint8_t* in, std::size_t in_size, std::uint64_t uncompressed_size,
                            std::vector<std::uint8_t>& out, const std::string& what) {
@@ -119,6 +141,7 @@ inline std::uint32_t xxh32(const std::uint8_t* p, std::size_t n) {
 inline void decompress_lz4_frame(const std::uint8_t* in, std::size_t in_size, std::uint64_t uncompressed_size,
                                  std::vector<std::uint8_t>& out, const std::string& what) {
   check_chunk_size(uncompressed_size, what);
+  check_expansion(in_size, uncompressed_size, kMaxLz4Ratio, "LZ4", what);
   out.resize(static_cast<std::size_t>(uncompressed_size));
   LZ4F_dctx* raw = nullptr;
   if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) {
@@ -176,6 +199,7 @@ inline void decompress_lz4_frame(const std::uint8_t* in, std::size_t in_size, st
 inline void decompress_zstd(const std::uint8_t* in, std::size_t in_size, std::uint64_t uncompressed_size,
                             std::vector<std::uint8_t>& out, const std::string& what) {
   check_chunk_size(uncompressed_size, what);
+  check_expansion(in_size, uncompressed_size, kMaxZstdRatio, "zstd", what);
   out.resize(static_cast<std::size_t>(uncompressed_size));
   const std::size_t n = ZSTD_decompress(out.data(), out.size(), in, in_size);
   if (ZSTD_isError(n) != 0U) throw FormatError(what + ": zstd data is corrupt (" + ZSTD_getErrorName(n) + ")");
