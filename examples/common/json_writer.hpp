@@ -3,12 +3,14 @@
 // Keys and strings are escaped; non-finite numbers are written as null and
 // counted, so the output is always valid JSON (RFC 8259 has no inf or nan).
 
+#include <charconv>
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <system_error>
 #include <vector>
 
 namespace semlio_examples {
@@ -32,14 +34,16 @@ class JsonWriter {
     return *this;
   }
 
-  /// A number as JSON: finite values in "%.10g" (a finite double never prints
-  /// as "inf"/"nan"), non-finite ones as null, counted in non_finite_count().
+  /// A number as JSON: finite values in the shortest form that reads back
+  /// as the same double (std::to_chars; ten significant digits
+  /// would cut an epoch stamp such as 1317357625.1 to whole seconds), non-finite ones as null, counted in
+  /// non_finite_count().
   JsonWriter& value(double v) {
     comma();
     if (std::isfinite(v)) {
       char buf[32];
-      std::snprintf(buf, sizeof buf, "%.10g", v);
-      out_ << buf;
+      const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+      out_ << std::string_view(buf, ec == std::errc() ? static_cast<std::size_t>(end - buf) : 0U);
     } else {
       out_ << "null";
       ++non_finite_;
