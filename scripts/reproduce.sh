@@ -27,12 +27,17 @@
 #   KITTI_ROOT=DIR       a KITTI odometry sequence dataset/sequences/NN
 #                        (velodyne/, calib.txt, times.txt; ground truth as
 #                        semlio_kitti finds it); KITTI_FRAMES=N caps its length.
+#   BAGS="FILE ..."      your recordings (ROS 1 bag, MCAP, rosbag2 .db3), read by
+#                        semlio_run with its sensor detection (no reference:
+#                        path length and frame time only). Both runs, quick and
+#                        full, also read the three KITTI scans of tests/data/bags
+#                        from a ROS 1 bag and an MCAP file.
 # Environment: BUILD_DIR (build), OUT (results/reproduce[_quick]), SKIP_BUILD=1
 # (use BUILD_DIR as built, install nothing), SEED (1), LONG_FRAMES (1000: the
 # long simulated drive of the full run), DATASETS (shell patterns: run only the
 # datasets whose names match, e.g. 'sim_urban_heavy sim_rural kitti*').
 #
-# Each dataset runs semlio_kitti six times (configurations below, all with
+# Each dataset runs semlio_kitti (a recording: semlio_run) six times (configurations below, all with
 # the same settings otherwise) one after the other; accuracy is
 # deterministic (same binary, same numbers), frame times are not.
 set -euo pipefail
@@ -82,28 +87,27 @@ echo "start: $(load_now)" > "$OUT/load.txt"
 
 # --- the six configurations of Table 3 --------------------------------------
 # semlio_kitti has two presets; the parts of `full` are switched off through
-# its --config YAML (examples/kitti/settings_yaml.hpp):
+# its --config YAML (examples/kitti/settings_yaml.hpp), every run with the
+# dataset's labels:
 # - semantic keyframes off: semantic_keyframes.weight_min = 1 clamps W_se to
 #   1 (eq. 20), so tau' = tau (eq. 21-22): the pose-threshold rule with the
 #   baseline's thresholds (both 1.0 m / 0.2 rad);
-# - semantic weights off: --labels none gives every point the same label, so
-#   every weight of eq. 10-12 is 1 (and the keyframe histograms carry nothing);
+# - semantic weights off: semantic_weights.mode = off (every weight of eq.
+#   10-12 is 1);
 # - normal-consistency association off: normal.candidates = keep = 5 and
 #   max_angle_rad = 1.57 (the largest the validator allows is pi/2) keep the 5
 #   nearest map points within 1 m, as NearestK does (nearly: a candidate
 #   whose axis is exactly perpendicular to the scan's would still be dropped).
-# "Semantic keyframes alone" needs the weights off with the labels on, which no
-# YAML key does: that row is semantic keyframes + semantic weights (no Algorithm 1).
+nearest5='normal: {candidates: 5, keep: 5, max_angle_rad: 1.57}'
 cat > "$OUT/configs/full.yaml" <<< "{}"
 cat > "$OUT/configs/baseline.yaml" <<< "{}"
 cat > "$OUT/configs/full_pose_kf.yaml" <<< "semantic_keyframes: {weight_min: 1.0}"
-cat > "$OUT/configs/nc_only.yaml" <<< "semantic_keyframes: {weight_min: 1.0}"
-printf 'normal: {candidates: 5, keep: 5, max_angle_rad: 1.57}\nsemantic_keyframes: {weight_min: 1.0}\n' \
-  > "$OUT/configs/weights_only.yaml"
-printf 'normal: {candidates: 5, keep: 5, max_angle_rad: 1.57}\n' > "$OUT/configs/weights_kf.yaml"
-# name preset labels(semantic|none)
-CONFIGS=("baseline baseline semantic" "full full semantic" "nc_only full none"
-         "weights_only full semantic" "weights_kf full semantic" "full_pose_kf full semantic")
+printf "semantic_weights: {mode: 'off'}\nsemantic_keyframes: {weight_min: 1.0}\n" > "$OUT/configs/nc_only.yaml"
+printf '%s\nsemantic_keyframes: {weight_min: 1.0}\n' "$nearest5" > "$OUT/configs/weights_only.yaml"
+printf "%s\nsemantic_weights: {mode: 'off'}\n" "$nearest5" > "$OUT/configs/keyframes_only.yaml"
+# name preset
+CONFIGS=("baseline baseline" "full full" "nc_only full" "weights_only full" "keyframes_only full"
+         "full_pose_kf full")
 
 # --- datasets ----------------------------------------------------------------
 # datasets.tsv: name, dir, kind (simulated|real), scene, label source, extra
@@ -141,6 +145,12 @@ pcd_folder() {  # name dir: a folder of PCD scans -> a KITTI layout (no ground t
   printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$OUT/data/$1" real "KITTI raw HDL-64E, urban road" geometric \
     "$OUT/configs/$1.extra.yaml" "none" >> "$DS"
 }
+recording() {  # name file scene [semlio_run option ...]: a ROS 1 bag / MCAP / rosbag2 of real scans
+  wanted "$1" || return 0
+  printf '%s\n' "${@:4}" > "$OUT/configs/$1.args"
+  printf 'deskew: {mode: constant_velocity, point_times: azimuth}\n' > "$OUT/configs/$1.extra.yaml"
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$1" "$2" real "$3" geometric "$OUT/configs/$1.extra.yaml" "none" >> "$DS"
+}
 if [[ $QUICK == 1 ]]; then
   simulate sim_urban_heavy urban heavy 30
   simulate sim_rural rural light 20
@@ -155,6 +165,22 @@ fi
 wanted kitti00_2 && printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' kitti00_2 tests/data/kitti/sequences/00 real "KITTI 00 (first 2 scans), urban" \
   geometric - "KITTI ground truth" >> "$DS"
 pcd_folder kitti_raw_3 tests/data/kitti_raw/snippet_22
+# The same three scans as recorded by the ROS reference implementations
+# (tests/data/bags/README.md), read without ROS and told what a KITTI user
+# knows (the sensor, KITTI's vertical-angle correction), so their rows match
+# kitti_raw_3's. Needs semlio_run built with the bag readers
+# (SEMLIO_WITH_BAGS; the probe reads one frame).
+if [[ -x "$BIN/semlio_run" ]] && "$BIN/semlio_run" --input tests/data/bags/kitti3_lz4.bag --last 0 --map off \
+  --quiet --out "$OUT/bag_probe" > /dev/null 2>&1; then
+  kitti=(--sensor hdl64e --kitti-correction on)
+  recording bag_kitti3 tests/data/bags/kitti3_lz4.bag "KITTI raw HDL-64E in a ROS 1 bag (lz4)" "${kitti[@]}"
+  recording mcap_kitti3 tests/data/bags/kitti3_zstd.mcap "KITTI raw HDL-64E in an MCAP file (zstd)" "${kitti[@]}"
+fi
+# BAGS="FILE ...": your own recordings (ROS 1 bag, MCAP, rosbag2 .db3), lidar only, no reference.
+for bag in ${BAGS:-}; do
+  stem=$(basename "$bag")
+  recording "rec_${stem%.*}" "$bag" "recording $stem"
+done
 if [[ $QUICK == 0 ]]; then
   if [[ -n "${KITTI_RAW:-}" ]]; then pcd_folder kitti_raw_snippet "$KITTI_RAW"; fi
   if [[ -n "${KITTI_RAW_DRIVE:-}" ]]; then
@@ -188,16 +214,23 @@ while IFS=$'\t' read -r name dir kind scene labels extra ref; do
   last=()
   if [[ "$name" == kitti_[0-9]* && -n "${KITTI_FRAMES:-}" ]]; then last=(--last $((KITTI_FRAMES - 1))); fi
   for c in "${CONFIGS[@]}"; do
-    read -r cname preset lab <<< "$c"
-    [[ "$lab" == none ]] && lab=none || lab=$labels
+    read -r cname preset <<< "$c"
+    lab=$labels
     cfg="$OUT/configs/$name.$cname.yaml"
     cat "$OUT/configs/$cname.yaml" > "$cfg"
     if [[ "$extra" != - ]]; then cat "$extra" >> "$cfg"; fi
     # Both files are YAML maps; "{}" plus a second map is not one: drop it.
     sed -i '/^{}$/d' "$cfg"
     [[ -s "$cfg" ]] || echo "{}" > "$cfg"
-    echo "== $name: $cname (semlio_kitti --preset $preset --labels $lab)"
-    "$BIN/semlio_kitti" --sequence "$dir" --preset "$preset" --labels "$lab" --config "$cfg" --map off \
+    # A folder is a KITTI layout (semlio_kitti); a file is a recording (semlio_run).
+    if [[ -f "$dir" ]]; then
+      tool=(semlio_run --input "$dir")
+      while read -r a; do [[ -n "$a" ]] && tool+=("$a"); done < "$OUT/configs/$name.args"
+    else
+      tool=(semlio_kitti --sequence "$dir")
+    fi
+    echo "== $name: $cname (${tool[0]} --preset $preset --labels $lab)"
+    "$BIN/${tool[0]}" "${tool[@]:1}" --preset "$preset" --labels "$lab" --config "$cfg" --map off \
       "${last[@]}" --out "$OUT/runs/$name/$cname" --quiet --overwrite > "$OUT/runs/$name.$cname.log" 2>&1 ||
       { cat "$OUT/runs/$name.$cname.log" >&2; exit 1; }
   done
