@@ -168,15 +168,20 @@ inline void apply(const YAML::Node& section, const std::string& name, const Sett
 /// file or a device is an IoError, not an unbounded read).
 inline constexpr std::uint64_t kMaxConfigBytes = std::uint64_t{16} << 20;
 
-/// Parses the YAML file at `path`: IoError when it cannot be read, ConfigError
-/// naming the line on a syntax error.
-inline YAML::Node load_yaml_file(const std::string& path) {
-  const std::string text = semlio::io::detail::read_file(path, kMaxConfigBytes);
+/// Parses YAML text; `name` (the file) is what a ConfigError names, with
+/// the line of a syntax error.
+inline YAML::Node parse_yaml_text(const std::string& text, const std::string& name) {
   try {
     return YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw semlio::ConfigError(semlio::detail::where(path, e.mark.line >= 0 ? e.mark.line + 1L : 0L, e.msg));
+    throw semlio::ConfigError(semlio::detail::where(name, e.mark.line >= 0 ? e.mark.line + 1L : 0L, e.msg));
   }
+}
+
+/// Parses the YAML file at `path`: IoError when it cannot be read, ConfigError
+/// naming the line on a syntax error.
+inline YAML::Node load_yaml_file(const std::string& path) {
+  return parse_yaml_text(semlio::io::detail::read_file(path, kMaxConfigBytes), path);
 }
 
 }  // namespace detail
@@ -190,11 +195,12 @@ struct BackEndSettings {
   semlio::SemanticMapConfig map{};             ///< OUT/map.ply
 };
 
-/// Applies the overrides in the YAML file at `path` to `s` and, when given,
-/// to the back-end settings `b`. Throws semlio::ConfigError (unknown key, bad
-/// value) or semlio::IoError.
-inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings& s, BackEndSettings* b = nullptr) {
-  const YAML::Node root = detail::load_yaml_file(path);
+/// Applies the overrides in the YAML `text` to `s` and, when given, to the
+/// back-end settings `b`; errors name `path` (the file the text came from).
+/// Throws semlio::ConfigError (syntax, unknown key, bad value).
+inline void parse_settings_yaml(const std::string& text, const std::string& path, semlio::PipelineSettings& s,
+                                BackEndSettings* b = nullptr) {
+  const YAML::Node root = detail::parse_yaml_text(text, path);
   if (!root || root.IsNull()) return;
   if (!root.IsMap()) throw semlio::ConfigError(detail::where(path, root, "the config is " + detail::kind_of(root) + ", expected a YAML map"));
   using detail::num;
@@ -352,6 +358,13 @@ inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings
     }
     detail::apply(kv.second, name, be_it->second, path);
   }
+}
+
+/// Applies the overrides in the YAML file at `path` to `s` and, when given,
+/// to the back-end settings `b`. Throws semlio::ConfigError (unknown key, bad
+/// value) or semlio::IoError (unreadable, larger than kMaxConfigBytes).
+inline void load_settings_yaml(const std::string& path, semlio::PipelineSettings& s, BackEndSettings* b = nullptr) {
+  parse_settings_yaml(semlio::io::detail::read_file(path, detail::kMaxConfigBytes), path, s, b);
 }
 
 }  // namespace semlio_examples

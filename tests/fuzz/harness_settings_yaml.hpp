@@ -16,13 +16,13 @@
 
 namespace semlio_fuzz {
 
-/// The YAML settings file: load_settings_yaml over fresh settings.
+/// The YAML settings text: parse_settings_yaml (load_settings_yaml's body
+/// without the file read) over fresh settings.
 inline int fuzz_settings_yaml(const std::uint8_t* data, std::size_t size) {
-  const std::string path = write_scratch("settings.yaml", as_text(data, size));
   semlio::PipelineSettings s;
   semlio_examples::BackEndSettings b;
   try {
-    semlio_examples::load_settings_yaml(path, s, &b);
+    semlio_examples::parse_settings_yaml(std::string(as_text(data, size)), "settings.yaml", s, &b);
   } catch (const semlio::Error&) {
     return 0;
   }
