@@ -20,6 +20,7 @@
 #include <semlio/io/bag/mcap.hpp>
 #include <semlio/io/bag/sqlite_bag.hpp>
 #include <semlio/io/cdr_msgs.hpp>
+#include <semlio_test/bag_compare.hpp>
 #include <semlio_test/data.hpp>
 #include <semlio_test/io_cloud_files.hpp>
 
@@ -252,20 +253,8 @@ TEST_CASE("rosbag2 sqlite3: from_bytes reads a .db3 held in memory like its path
   const std::string path = kBag + "/ros2_sqlite_0.db3";
   SqliteBagReader by_path(path);
   SqliteBagReader in_memory = SqliteBagReader::from_bytes(semlio_test::read_bytes(path), "mem.db3");
-  REQUIRE(in_memory.topics().size() == by_path.topics().size());
-  for (std::size_t i = 0; i < by_path.topics().size(); ++i) {
-    CHECK(in_memory.topics()[i].name == by_path.topics()[i].name);
-    CHECK(in_memory.topics()[i].message_count == by_path.topics()[i].message_count);
-  }
-  const std::vector<BagMessage> a = read_all(by_path);
-  const std::vector<BagMessage> b = read_all(in_memory);
-  REQUIRE(a.size() == 11);  // 2 + 7 + 2 messages on its three topics (counted with the sqlite3 shell)
-  REQUIRE(b.size() == a.size());
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    CHECK(b[i].topic == a[i].topic);
-    CHECK(b[i].log_time_ns == a[i].log_time_ns);
-    CHECK(b[i].data == a[i].data);
-  }
+  // 2 + 7 + 2 messages on its three topics (counted with the sqlite3 shell)
+  CHECK(semlio_test::check_same_bag(by_path, in_memory) == 11);
   CHECK_THROWS_WITH(SqliteBagReader::from_bytes("not a database", "mem.db3"), Catch::Contains("mem.db3"));
   CHECK_THROWS_AS(SqliteBagReader::from_bytes("", "empty.db3"), semlio::FormatError);
 }
