@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "harness_settings_yaml.hpp"
@@ -87,6 +88,26 @@ TEST_CASE("settings YAML: numeric values outside their domain are ConfigErrors n
   CHECK(config_error("odometry:\n  max_correction_m: 0.5\n  min_frame_interval_s: 0\nsolver:\n  max_iterations: 1\n") ==
         "<no exception>");
   CHECK(config_error("odometry:\n") == "<no exception>");  // a null section changes nothing
+}
+
+TEST_CASE("settings YAML: semantic_weights.mode takes its three names, anything else is a ConfigError",
+          "[fuzz][config]") {
+  CHECK_THAT(config_error("semantic_weights:\n  mode: bogus\n"),
+             Catch::Contains(":2: 'semantic_weights.mode' is 'bogus', expected chance_corrected, paper or off"));
+  CHECK_THAT(config_error("semantic_weights: {mode: [paper]}\n"),
+             Catch::Contains(":1: 'semantic_weights.mode' is a sequence"));
+  CHECK_THAT(config_error("semantic_weights: {weight: 1}\n"), Catch::Contains("unknown key 'semantic_weights.weight'"));
+  const std::vector<std::pair<std::string, semlio::SemanticWeightMode>> names = {
+      {"chance_corrected", semlio::SemanticWeightMode::kChanceCorrected},
+      {"paper", semlio::SemanticWeightMode::kPaper},
+      {"'off'", semlio::SemanticWeightMode::kOff}};
+  for (const auto& [name, mode] : names) {
+    INFO(name);
+    semlio::PipelineSettings s;
+    s.semantic_weights.mode = name == "paper" ? semlio::SemanticWeightMode::kOff : semlio::SemanticWeightMode::kPaper;
+    semlio_examples::parse_settings_yaml("semantic_weights: {mode: " + name + "}\n", "t.yaml", s);
+    CHECK(s.semantic_weights.mode == mode);
+  }
 }
 
 TEST_CASE("settings YAML: a missing, huge or non-regular config file is an IoError", "[fuzz][config]") {
