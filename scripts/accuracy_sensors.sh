@@ -48,7 +48,9 @@ bound_pct() {
 # is probed on two frames of the drive: an unknown section fails at once.
 sensor_args() {
   local sensor=$1 dir=$2
-  if "$KITTI" --help 2>&1 | grep -q -- "--sensor"; then
+  local help
+  help=$("$KITTI" --help 2>&1 || true)  # whole, not piped into grep -q (SIGPIPE under pipefail)
+  if [[ "$help" == *--sensor* ]]; then
     echo "--sensor $sensor"
     return
   fi

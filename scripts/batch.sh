@@ -88,7 +88,11 @@ echo "== $(basename "$TOOL") over ${#inputs[@]} inputs, $JOBS at a time -> $OUT"
 # One job per input; each run's outputs in its own folder, its terminal output in log.txt.
 # --overwrite where the tool has it (semlio_run, today's semlio_kitti): a rerun replaces old runs.
 overwrite=()
-"$TOOL" --help 2>&1 | grep -q -- --overwrite && overwrite=(--overwrite)
+# The help text is read whole first: `--help | grep -q` under pipefail fails
+# whenever grep quits before the tool has written everything (SIGPIPE), and a
+# rerun without --overwrite is then refused (exit 1, the old report left in place).
+help=$("$TOOL" --help 2>&1 || true)
+[[ "$help" == *--overwrite* ]] && overwrite=(--overwrite)
 export TOOL INPUT_FLAG OUT
 run_one() {  # name input options...
   local name=$1 input=$2
