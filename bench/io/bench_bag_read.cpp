@@ -1,7 +1,7 @@
 // Reading + decoding the real KITTI scans from a ROS 1 bag (lz4 chunks,
 // tests/data/bags/kitti3_lz4.bag): the must-hold is >= 10x the odometry frame
-// rate on one core (frame ~21 ms -> <= 2.1 ms per 120k-point scan, >= ~475
-// scans/s). Run: taskset -c 1 build/bench/bench_bag_read
+// rate on one core; scripts/read_speed.sh measures both on the same core and
+// prints the ratio. Run: taskset -c 1 build/bench/bench_bag_read
 #include <benchmark/benchmark.h>
 
 #include <string>
