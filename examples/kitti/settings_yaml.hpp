@@ -17,9 +17,9 @@
 
 #include <cmath>
 #include <cstdint>
-#include <functional>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <type_traits>
@@ -36,10 +36,24 @@
 
 namespace semlio_examples {
 
+struct BackEndSettings;
+
 namespace detail {
 
-// A section maps key -> setter that reads the YAML node into a field.
-using Setters = std::map<std::string, std::function<void(const YAML::Node&)>>;
+/// What the setters write into: the front-end settings and the back end's.
+struct Targets {
+  semlio::PipelineSettings& s;  ///< front end
+  BackEndSettings& be;          ///< back end (a scratch copy when the caller wants none)
+};
+
+/// Reads one YAML value into its field of `t` (a BadValue when refused).
+using Setter = void (*)(Targets&, const YAML::Node&);
+
+/// A section: key -> setter. Plain function pointers in tables built once
+/// (sections()), not closures over the settings built per call: the fuzz
+/// harness parses millions of configs and the per-call tables (~120
+/// std::function and map nodes) were most of its time.
+using Setters = std::map<std::string, Setter>;
 
 /// Thrown by a setter with the reason a value is refused; apply() turns it
 /// into a ConfigError naming the file, line and key path.
@@ -87,64 +101,63 @@ inline std::string number_text(double v) {
 
 /// A bool or string field: any scalar yaml-cpp converts.
 template <typename T>
-std::function<void(const YAML::Node&)> set(T& field) {
-  static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::string>, "numbers go through num()");
-  return [&field](const YAML::Node& n) {
-    if (!n.IsScalar()) throw BadValue{"is " + kind_of(n) + ", expected a scalar"};
-    field = n.as<T>();
-  };
+void read_value(T& field, const YAML::Node& n) {
+  static_assert(std::is_same_v<T, bool> || std::is_same_v<T, std::string>, "numbers go through read_num()");
+  if (!n.IsScalar()) throw BadValue{"is " + kind_of(n) + ", expected a scalar"};
+  field = n.as<T>();
 }
 
 /// SemanticWeightConfig::mode from its name: chance_corrected, paper, off.
-inline std::function<void(const YAML::Node&)> semantic_weight_mode(semlio::SemanticWeightMode& field) {
-  return [&field](const YAML::Node& n) {
-    const std::string v = n.IsScalar() ? n.Scalar() : std::string();
-    if (v == "chance_corrected") {
-      field = semlio::SemanticWeightMode::kChanceCorrected;
-    } else if (v == "paper") {
-      field = semlio::SemanticWeightMode::kPaper;
-    } else if (v == "off") {
-      field = semlio::SemanticWeightMode::kOff;
-    } else {
-      throw BadValue{"is " + kind_of(n) + ", expected chance_corrected, paper or off"};
-    }
-  };
+inline void read_weight_mode(semlio::SemanticWeightMode& field, const YAML::Node& n) {
+  const std::string v = n.IsScalar() ? n.Scalar() : std::string();
+  if (v == "chance_corrected") {
+    field = semlio::SemanticWeightMode::kChanceCorrected;
+  } else if (v == "paper") {
+    field = semlio::SemanticWeightMode::kPaper;
+  } else if (v == "off") {
+    field = semlio::SemanticWeightMode::kOff;
+  } else {
+    throw BadValue{"is " + kind_of(n) + ", expected chance_corrected, paper or off"};
+  }
+}
+
+/// "[lo, hi]" or "(lo, hi]": the domain as messages write it.
+inline std::string domain_text(double lo, double hi, bool lo_open) {
+  return std::string(lo_open ? "(" : "[") + number_text(lo) + ", " + number_text(hi) + "]";
 }
 
 /// A numeric field with its domain [lo, hi] ((lo, hi] when `lo_open`): the
 /// value must be finite, integral for integer fields, and inside the domain.
+/// The domain text is built only for a message (this runs once per key).
 template <typename T>
-std::function<void(const YAML::Node&)> num(T& field, double lo, double hi, bool lo_open = false) {
-  static_assert(std::is_arithmetic_v<T> && !std::is_same_v<T, bool>, "num() takes numeric fields");
-  return [&field, lo, hi, lo_open](const YAML::Node& n) {
-    if (!n.IsScalar()) throw BadValue{"is " + kind_of(n) + ", expected a number"};
-    const std::string domain =
-        std::string(lo_open ? "(" : "[") + number_text(lo) + ", " + number_text(hi) + "]";
-    double v = 0.0;
-    if constexpr (std::is_integral_v<T>) {
-      long long i = 0;
-      if (!YAML::convert<long long>::decode(n, i)) {
-        throw BadValue{"= '" + n.Scalar() + "' is not an integer (domain " + domain + ")"};
-      }
-      v = static_cast<double>(i);
-    } else {
-      if (!YAML::convert<double>::decode(n, v)) {
-        throw BadValue{"= '" + n.Scalar() + "' is not a number (domain " + domain + ")"};
-      }
+void read_num(T& field, const YAML::Node& n, double lo, double hi, bool lo_open = false) {
+  static_assert(std::is_arithmetic_v<T> && !std::is_same_v<T, bool>, "read_num() takes numeric fields");
+  if (!n.IsScalar()) throw BadValue{"is " + kind_of(n) + ", expected a number"};
+  double v = 0.0;
+  if constexpr (std::is_integral_v<T>) {
+    long long i = 0;
+    if (!YAML::convert<long long>::decode(n, i)) {
+      throw BadValue{"= '" + n.Scalar() + "' is not an integer (domain " + domain_text(lo, hi, lo_open) + ")"};
     }
-    const bool inside = std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi;
-    if (!inside) throw BadValue{"= " + n.Scalar() + " is outside its domain " + domain};
-    field = static_cast<T>(v);
-  };
+    v = static_cast<double>(i);
+  } else {
+    if (!YAML::convert<double>::decode(n, v)) {
+      throw BadValue{"= '" + n.Scalar() + "' is not a number (domain " + domain_text(lo, hi, lo_open) + ")"};
+    }
+  }
+  const bool inside = std::isfinite(v) && (lo_open ? v > lo : v >= lo) && v <= hi;
+  if (!inside) throw BadValue{"= " + n.Scalar() + " is outside its domain " + domain_text(lo, hi, lo_open)};
+  field = static_cast<T>(v);
 }
 
 /// A numeric field that must be positive: domain (0, hi].
 template <typename T>
-std::function<void(const YAML::Node&)> pos(T& field, double hi) {
-  return num(field, 0.0, hi, true);
+void read_pos(T& field, const YAML::Node& n, double hi) {
+  read_num(field, n, 0.0, hi, true);
 }
 
-inline void apply(const YAML::Node& section, const std::string& name, const Setters& setters,
+/// Applies one section: every key must be in `setters`, which write into `t`.
+inline void apply(const YAML::Node& section, const std::string& name, const Setters& setters, Targets& t,
                   const std::string& path) {
   if (!section || section.IsNull()) return;
   if (!section.IsMap()) {
@@ -155,7 +168,7 @@ inline void apply(const YAML::Node& section, const std::string& name, const Sett
     const auto it = setters.find(key);
     if (it == setters.end()) throw semlio::ConfigError(where(path, kv.first, "unknown key '" + name + "." + key + "'"));
     try {
-      it->second(kv.second);
+      it->second(t, kv.second);
     } catch (const BadValue& e) {
       throw semlio::ConfigError(where(path, kv.second, "'" + name + "." + key + "' " + e.why));
     } catch (const YAML::Exception& e) {
@@ -195,6 +208,261 @@ struct BackEndSettings {
   semlio::SemanticMapConfig map{};             ///< OUT/map.ply
 };
 
+namespace detail {
+
+/// Every section but `deskew` (deskew_yaml.hpp): section -> key -> setter,
+/// each with the domain of its field. Built once; the setters take the
+/// settings they write as a parameter.
+inline const std::map<std::string, Setters>& sections() {
+  constexpr double kPi = std::numbers::pi;
+  constexpr double kBig = 1e12;  // counts and scales: any sane value, never negative
+  // nearest.k and normal.keep: the YAML domain is [1, kMaxCandidates]; the
+  // associators' own checks narrow it to [1, kMaxKeptMatches] (a ConfigError
+  // naming the field when the pipeline is built).
+  // The front end (PipelineSettings, t.s), then the back end (t.be).
+  static const std::map<std::string, Setters> table = {
+      {"odometry",
+       {
+           {"kitti_vertical_correction",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.kitti_vertical_correction, n); }},
+           {"min_frame_interval_s",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.min_frame_interval_s, n, 0.0, 3600.0); }},
+           {"min_features", [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.min_features, n, 0.0, kBig); }},
+           {"max_correction_m",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.s.odometry.max_correction_m, n, 1e4); }},
+           {"max_correction_rad",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.s.odometry.max_correction_rad, n, kPi); }},
+       }},
+      {"preprocess",
+       {
+           {"min_range_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.preprocess.min_range_m, n, 0.0, 1e4); }},
+           {"max_range_m",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.s.odometry.preprocess.max_range_m, n, 1e4); }},
+           {"crop_ego_box",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.preprocess.crop_ego_box, n); }},
+       }},
+      {"features",
+       {
+           {"neighbours",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.neighbours, n, 1.0, 100.0); }},
+           {"sectors",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.sectors, n, 1.0, 3600.0); }},
+           {"max_corners_per_sector",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.max_corners_per_sector, n, 0.0, kBig); }},
+           {"corner_threshold_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.corner_threshold_m, n, 0.0, 1e3); }},
+           {"surface_threshold_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.surface_threshold_m, n, 0.0, 1e3); }},
+           {"occlusion_depth_gap_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.occlusion_depth_gap_m, n, 0.0, 1e3); }},
+           {"parallel_beam_ratio",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.parallel_beam_ratio, n, 0.0, 1e3); }},
+           {"surface_leaf_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.surface_leaf_m, n, 0.0, 100.0); }},
+           {"corner_leaf_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.features.corner_leaf_m, n, 0.0, 100.0); }},
+       }},
+      {"map",
+       {
+           {"radius_m", [](Targets& t, const YAML::Node& n) { read_pos(t.s.odometry.map.radius_m, n, 1e4); }},
+           {"corner_leaf_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.map.corner_leaf_m, n, 0.0, 100.0); }},
+           {"surface_leaf_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.map.surface_leaf_m, n, 0.0, 100.0); }},
+           {"shape_neighbours",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.map.shape_neighbours, n, 1.0, 1000.0); }},
+           {"exclude_dynamic",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.map.exclude_dynamic, n); }},
+           {"max_keyframes",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.map.max_keyframes, n, 0.0, kBig); }},
+           {"keep_first_point",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.map.keep_first_point, n); }},
+       }},
+      {"solver",
+       {
+           {"max_iterations",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.solver.max_iterations, n, 1.0, 1e6); }},
+           {"reassociate_every",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.solver.reassociate_every, n, 1.0, 1e6); }},
+           {"levenberg_marquardt",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.solver.levenberg_marquardt, n); }},
+           {"translation_tolerance_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.solver.translation_tolerance_m, n, 0.0, 1e3); }},
+           {"rotation_tolerance_rad",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.solver.rotation_tolerance_rad, n, 0.0, kPi); }},
+           {"degeneracy_threshold",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.solver.degeneracy_threshold, n, 0.0, kBig); }},
+           {"remap_degenerate",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.solver.remap_degenerate, n); }},
+           {"damp_degenerate",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.solver.damp_degenerate, n); }},
+           {"min_residuals",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.odometry.solver.min_residuals, n, 0.0, kBig); }},
+       }},
+      {"nearest",
+       {
+           {"k", [](Targets& t, const YAML::Node& n) { read_num(t.s.nearest.k, n, 1.0, semlio::kMaxCandidates); }},
+           {"max_distance_m", [](Targets& t, const YAML::Node& n) { read_pos(t.s.nearest.max_distance_m, n, 1e4); }},
+       }},
+      {"normal",
+       {
+           {"candidates",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.normal.candidates, n, 1.0, semlio::kMaxCandidates); }},
+           {"keep", [](Targets& t, const YAML::Node& n) { read_num(t.s.normal.keep, n, 1.0, semlio::kMaxCandidates); }},
+           {"scan_neighbours",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.normal.scan_neighbours, n, 0.0, 1000.0); }},
+           {"max_angle_rad", [](Targets& t, const YAML::Node& n) { read_num(t.s.normal.max_angle_rad, n, 0.0, kPi); }},
+           {"max_distance_m", [](Targets& t, const YAML::Node& n) { read_pos(t.s.normal.max_distance_m, n, 1e4); }},
+       }},
+      {"line",
+       {
+           {"two_point", [](Targets& t, const YAML::Node& n) { read_value(t.s.line.two_point, n); }},
+           {"max_linearity_ratio",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.line.max_linearity_ratio, n, 0.0, 1e6); }},
+           {"cauchy_m", [](Targets& t, const YAML::Node& n) { read_num(t.s.corner_cauchy_m, n, 0.0, 1e3); }},
+       }},
+      {"plane",
+       {
+           {"three_point", [](Targets& t, const YAML::Node& n) { read_value(t.s.plane.three_point, n); }},
+           {"max_planarity_ratio",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.plane.max_planarity_ratio, n, 0.0, 1e6); }},
+           {"min_spread_ratio",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.plane.min_spread_ratio, n, 0.0, 1e6); }},
+       }},
+      {"semantic_weights",
+       {
+           {"mode", [](Targets& t, const YAML::Node& n) { read_weight_mode(t.s.semantic_weights.mode, n); }},
+       }},
+      {"pose_threshold",
+       {
+           {"translation_threshold_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.pose_threshold.translation_threshold_m, n, 0.0, 1e4); }},
+           {"rotation_threshold_rad",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.pose_threshold.rotation_threshold_rad, n, 0.0, kPi); }},
+       }},
+      {"semantic_keyframes",
+       {
+           {"translation_threshold_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.semantic_keyframes.translation_threshold_m, n, 0.0, 1e4); }},
+           {"rotation_threshold_rad",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.semantic_keyframes.rotation_threshold_rad, n, 0.0, kPi); }},
+           {"stability_threshold",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.semantic_keyframes.stability_threshold, n, 0.0, kBig); }},
+           {"weight_min",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.semantic_keyframes.weight_min, n, 0.0, 1.0); }},
+           {"laplace_count",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.semantic_keyframes.laplace_count, n, 0.0, kBig); }},
+       }},
+      {"slam",
+       {
+           {"loop_closure", [](Targets& t, const YAML::Node& n) { read_value(t.be.slam.loop_closure, n); }},
+           {"loop_detector", [](Targets& t, const YAML::Node& n) { read_value(t.be.loop_detector, n); }},
+           {"loop_interval_s",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.loop_interval_s, n, 0.0, 1e6); }},
+           {"robust_loops", [](Targets& t, const YAML::Node& n) { read_value(t.be.slam.robust_loops, n); }},
+           {"odometry_information_scale",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.odometry_information_scale, n, kBig); }},
+           {"min_information",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.min_information, n, 0.0, kBig); }},
+           {"max_information", [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.max_information, n, 1e15); }},
+           {"weak_sigma_m", [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.weak_sigma_m, n, 1e6); }},
+           {"weak_sigma_rad", [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.weak_sigma_rad, n, 1e3); }},
+           {"keyframe_cloud_leaf_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.keyframe_cloud_leaf_m, n, 0.0, 100.0); }},
+           {"keyframe_cloud_max_range_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.keyframe_cloud_max_range_m, n, 0.0, 1e4); }},
+           {"max_keyframe_clouds",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.max_keyframe_clouds, n, 0.0, kBig); }},
+           {"place_spacing_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.place_spacing_m, n, 0.0, 1e4); }},
+           {"max_place_bytes",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.max_place_bytes, n, 0.0, 1e15); }},
+           {"place_thinning_factor",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.place_thinning_factor, n, 1.0, 1e3, true); }},
+           {"imu_information_scale",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.inertial_graph.imu_information_scale, n, kBig); }},
+           {"inertial_lidar_information_scale",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.inertial_lidar_information_scale, n, kBig); }},
+           {"inertial_gravity_gauge",
+            [](Targets& t, const YAML::Node& n) { read_value(t.be.slam.inertial_gravity_gauge, n); }},
+           {"inertial_window_size",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.inertial_graph.window_size, n, 2.0, 1e6); }},
+       }},
+      {"loop_verify",
+       {
+           {"max_verifications",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.loop.max_verifications, n, 0.0, 1e6); }},
+           {"submap_neighbours",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.loop.verify.submap_neighbours, n, 0.0, 1e6); }},
+           {"submap_min_age_s",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.loop.verify.submap_min_age_s, n, 0.0, 1e6); }},
+           {"coarse_gate_m",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.loop.verify.coarse_gate_m, n, 1e4); }},
+           {"fine_gate_m",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.loop.verify.fine_gate_m, n, 1e4); }},
+           {"max_fitness_m",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.loop.verify.max_fitness_m, n, 1e4); }},
+           {"min_inlier_ratio",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.loop.verify.min_inlier_ratio, n, 0.0, 1.0); }},
+           {"reject_degenerate",
+            [](Targets& t, const YAML::Node& n) { read_value(t.be.slam.loop.verify.reject_degenerate, n); }},
+           {"max_correction_m",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.loop.verify.max_correction_m, n, 1e4); }},
+           {"max_correction_per_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.loop.verify.max_correction_per_m, n, 0.0, 1e3); }},
+           {"max_correction_rad",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.loop.verify.max_correction_rad, n, kPi); }},
+           {"max_correction_rad_per_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.loop.verify.max_correction_rad_per_m, n, 0.0, kPi); }},
+           {"hessian_scale",
+            [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.loop.verify.hessian_scale, n, kBig); }},
+       }},
+      {"radius_loop",
+       {
+           {"radius_m", [](Targets& t, const YAML::Node& n) { read_pos(t.be.radius.radius_m, n, 1e4); }},
+           {"min_time_gap_s",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.radius.min_time_gap_s, n, 0.0, 1e6); }},
+           {"max_candidates",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.radius.max_candidates, n, 1.0, 1e6); }},
+       }},
+      {"scan_context",
+       {
+           {"rings", [](Targets& t, const YAML::Node& n) { read_num(t.be.scan_context.rings, n, 1.0, 1e4); }},
+           {"sectors", [](Targets& t, const YAML::Node& n) { read_num(t.be.scan_context.sectors, n, 1.0, 1e4); }},
+           {"max_radius_m", [](Targets& t, const YAML::Node& n) { read_pos(t.be.scan_context.max_radius_m, n, 1e4); }},
+           {"lidar_height_m",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.scan_context.lidar_height_m, n, -1e3, 1e3); }},
+           {"min_time_gap_s",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.scan_context.min_time_gap_s, n, 0.0, 1e6); }},
+           {"ring_key_candidates",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.scan_context.ring_key_candidates, n, 1.0, 1e6); }},
+           {"max_distance",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.scan_context.max_distance, n, 0.0, 1.0); }},
+           {"max_candidates",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.scan_context.max_candidates, n, 1.0, 1e6); }},
+       }},
+      {"graph",
+       {
+           {"max_iterations",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.graph.max_iterations, n, 1.0, 1e6); }},
+           {"window_iterations",
+            [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.graph.window_iterations, n, 1.0, 1e6); }},
+           {"window_size", [](Targets& t, const YAML::Node& n) { read_num(t.be.slam.graph.window_size, n, 1.0, 1e9); }},
+           {"huber_delta", [](Targets& t, const YAML::Node& n) { read_pos(t.be.slam.graph.huber_delta, n, kBig); }},
+       }},
+      {"semantic_map",
+       {
+           {"leaf_size_m", [](Targets& t, const YAML::Node& n) { read_pos(t.be.map.leaf_size_m, n, 100.0); }},
+           {"drop_dynamic", [](Targets& t, const YAML::Node& n) { read_value(t.be.map.drop_dynamic, n); }},
+           {"max_range_m", [](Targets& t, const YAML::Node& n) { read_num(t.be.map.max_range_m, n, 0.0, 1e4); }},
+       }},
+  };
+  return table;
+}
+
+}  // namespace detail
+
 /// Applies the overrides in the YAML `text` to `s` and, when given, to the
 /// back-end settings `b`; errors name `path` (the file the text came from).
 /// Throws semlio::ConfigError (syntax, unknown key, bad value).
@@ -203,144 +471,12 @@ inline void parse_settings_yaml(const std::string& text, const std::string& path
   const YAML::Node root = detail::parse_yaml_text(text, path);
   if (!root || root.IsNull()) return;
   if (!root.IsMap()) throw semlio::ConfigError(detail::where(path, root, "the config is " + detail::kind_of(root) + ", expected a YAML map"));
-  using detail::num;
-  using detail::pos;
-  using detail::set;
-  constexpr double kPi = std::numbers::pi;
-  constexpr double kBig = 1e12;  // counts and scales: any sane value, never negative
-  // nearest.k and normal.keep: the YAML domain is [1, kMaxCandidates]; the
-  // associators' own checks narrow it to [1, kMaxKeptMatches] (a ConfigError
-  // naming the field when the pipeline is built).
-  auto& o = s.odometry;
-  const std::map<std::string, detail::Setters> sections = {
-      {"odometry",
-       {{"kitti_vertical_correction", set(o.kitti_vertical_correction)},
-        {"min_frame_interval_s", num(o.min_frame_interval_s, 0.0, 3600.0)},
-        {"min_features", num(o.min_features, 0.0, kBig)},
-        {"max_correction_m", pos(o.max_correction_m, 1e4)},
-        {"max_correction_rad", pos(o.max_correction_rad, kPi)}}},
-      {"preprocess",
-       {{"min_range_m", num(o.preprocess.min_range_m, 0.0, 1e4)},
-        {"max_range_m", pos(o.preprocess.max_range_m, 1e4)},
-        {"crop_ego_box", set(o.preprocess.crop_ego_box)}}},
-      {"features",
-       {{"neighbours", num(o.features.neighbours, 1.0, 100.0)},
-        {"sectors", num(o.features.sectors, 1.0, 3600.0)},
-        {"max_corners_per_sector", num(o.features.max_corners_per_sector, 0.0, kBig)},
-        {"corner_threshold_m", num(o.features.corner_threshold_m, 0.0, 1e3)},
-        {"surface_threshold_m", num(o.features.surface_threshold_m, 0.0, 1e3)},
-        {"occlusion_depth_gap_m", num(o.features.occlusion_depth_gap_m, 0.0, 1e3)},
-        {"parallel_beam_ratio", num(o.features.parallel_beam_ratio, 0.0, 1e3)},
-        {"surface_leaf_m", num(o.features.surface_leaf_m, 0.0, 100.0)},
-        {"corner_leaf_m", num(o.features.corner_leaf_m, 0.0, 100.0)}}},
-      {"map",
-       {{"radius_m", pos(o.map.radius_m, 1e4)},
-        {"corner_leaf_m", num(o.map.corner_leaf_m, 0.0, 100.0)},
-        {"surface_leaf_m", num(o.map.surface_leaf_m, 0.0, 100.0)},
-        {"shape_neighbours", num(o.map.shape_neighbours, 1.0, 1000.0)},
-        {"exclude_dynamic", set(o.map.exclude_dynamic)},
-        {"max_keyframes", num(o.map.max_keyframes, 0.0, kBig)},
-        {"keep_first_point", set(o.map.keep_first_point)}}},
-      {"solver",
-       {{"max_iterations", num(o.solver.max_iterations, 1.0, 1e6)},
-        {"reassociate_every", num(o.solver.reassociate_every, 1.0, 1e6)},
-        {"levenberg_marquardt", set(o.solver.levenberg_marquardt)},
-        {"translation_tolerance_m", num(o.solver.translation_tolerance_m, 0.0, 1e3)},
-        {"rotation_tolerance_rad", num(o.solver.rotation_tolerance_rad, 0.0, kPi)},
-        {"degeneracy_threshold", num(o.solver.degeneracy_threshold, 0.0, kBig)},
-        {"remap_degenerate", set(o.solver.remap_degenerate)},
-        {"damp_degenerate", set(o.solver.damp_degenerate)},
-        {"min_residuals", num(o.solver.min_residuals, 0.0, kBig)}}},
-      {"nearest", {{"k", num(s.nearest.k, 1.0, semlio::kMaxCandidates)}, {"max_distance_m", pos(s.nearest.max_distance_m, 1e4)}}},
-      {"normal",
-       {{"candidates", num(s.normal.candidates, 1.0, semlio::kMaxCandidates)},
-        {"keep", num(s.normal.keep, 1.0, semlio::kMaxCandidates)},
-        {"scan_neighbours", num(s.normal.scan_neighbours, 0.0, 1000.0)},
-        {"max_angle_rad", num(s.normal.max_angle_rad, 0.0, kPi)},
-        {"max_distance_m", pos(s.normal.max_distance_m, 1e4)}}},
-      {"line",
-       {{"two_point", set(s.line.two_point)},
-        {"max_linearity_ratio", num(s.line.max_linearity_ratio, 0.0, 1e6)},
-        {"cauchy_m", num(s.corner_cauchy_m, 0.0, 1e3)}}},
-      {"plane",
-       {{"three_point", set(s.plane.three_point)},
-        {"max_planarity_ratio", num(s.plane.max_planarity_ratio, 0.0, 1e6)},
-        {"min_spread_ratio", num(s.plane.min_spread_ratio, 0.0, 1e6)}}},
-      {"semantic_weights", {{"mode", detail::semantic_weight_mode(s.semantic_weights.mode)}}},
-      {"pose_threshold",
-       {{"translation_threshold_m", num(s.pose_threshold.translation_threshold_m, 0.0, 1e4)},
-        {"rotation_threshold_rad", num(s.pose_threshold.rotation_threshold_rad, 0.0, kPi)}}},
-      {"semantic_keyframes",
-       {{"translation_threshold_m", num(s.semantic_keyframes.translation_threshold_m, 0.0, 1e4)},
-        {"rotation_threshold_rad", num(s.semantic_keyframes.rotation_threshold_rad, 0.0, kPi)},
-        {"stability_threshold", num(s.semantic_keyframes.stability_threshold, 0.0, kBig)},
-        {"weight_min", num(s.semantic_keyframes.weight_min, 0.0, 1.0)},
-        {"laplace_count", num(s.semantic_keyframes.laplace_count, 0.0, kBig)}}},
-  };
-  BackEndSettings unused;
-  BackEndSettings& be = b != nullptr ? *b : unused;
-  auto& sl = be.slam;
-  auto& lv = be.slam.loop.verify;
-  auto& g = be.slam.graph;
-  auto& sc = be.scan_context;
-  const std::map<std::string, detail::Setters> back_end = {
-      {"slam",
-       {{"loop_closure", set(sl.loop_closure)},
-        {"loop_detector", set(be.loop_detector)},
-        {"loop_interval_s", num(sl.loop_interval_s, 0.0, 1e6)},
-        {"robust_loops", set(sl.robust_loops)},
-        {"odometry_information_scale", pos(sl.odometry_information_scale, kBig)},
-        {"min_information", num(sl.min_information, 0.0, kBig)},
-        {"max_information", pos(sl.max_information, 1e15)},
-        {"weak_sigma_m", pos(sl.weak_sigma_m, 1e6)},
-        {"weak_sigma_rad", pos(sl.weak_sigma_rad, 1e3)},
-        {"keyframe_cloud_leaf_m", num(sl.keyframe_cloud_leaf_m, 0.0, 100.0)},
-        {"keyframe_cloud_max_range_m", num(sl.keyframe_cloud_max_range_m, 0.0, 1e4)},
-        {"max_keyframe_clouds", num(sl.max_keyframe_clouds, 0.0, kBig)},
-        {"place_spacing_m", num(sl.place_spacing_m, 0.0, 1e4)},
-        {"max_place_bytes", num(sl.max_place_bytes, 0.0, 1e15)},
-        {"place_thinning_factor", num(sl.place_thinning_factor, 1.0, 1e3, true)},
-        {"imu_information_scale", pos(sl.inertial_graph.imu_information_scale, kBig)},
-        {"inertial_lidar_information_scale", pos(sl.inertial_lidar_information_scale, kBig)},
-        {"inertial_gravity_gauge", set(sl.inertial_gravity_gauge)},
-        {"inertial_window_size", num(sl.inertial_graph.window_size, 2.0, 1e6)}}},
-      {"loop_verify",
-       {{"max_verifications", num(sl.loop.max_verifications, 0.0, 1e6)},
-        {"submap_neighbours", num(lv.submap_neighbours, 0.0, 1e6)},
-        {"submap_min_age_s", num(lv.submap_min_age_s, 0.0, 1e6)},
-        {"coarse_gate_m", pos(lv.coarse_gate_m, 1e4)},
-        {"fine_gate_m", pos(lv.fine_gate_m, 1e4)},
-        {"max_fitness_m", pos(lv.max_fitness_m, 1e4)},
-        {"min_inlier_ratio", num(lv.min_inlier_ratio, 0.0, 1.0)},
-        {"reject_degenerate", set(lv.reject_degenerate)},
-        {"max_correction_m", pos(lv.max_correction_m, 1e4)},
-        {"max_correction_per_m", num(lv.max_correction_per_m, 0.0, 1e3)},
-        {"max_correction_rad", pos(lv.max_correction_rad, kPi)},
-        {"max_correction_rad_per_m", num(lv.max_correction_rad_per_m, 0.0, kPi)},
-        {"hessian_scale", pos(lv.hessian_scale, kBig)}}},
-      {"radius_loop",
-       {{"radius_m", pos(be.radius.radius_m, 1e4)},
-        {"min_time_gap_s", num(be.radius.min_time_gap_s, 0.0, 1e6)},
-        {"max_candidates", num(be.radius.max_candidates, 1.0, 1e6)}}},
-      {"scan_context",
-       {{"rings", num(sc.rings, 1.0, 1e4)},
-        {"sectors", num(sc.sectors, 1.0, 1e4)},
-        {"max_radius_m", pos(sc.max_radius_m, 1e4)},
-        {"lidar_height_m", num(sc.lidar_height_m, -1e3, 1e3)},
-        {"min_time_gap_s", num(sc.min_time_gap_s, 0.0, 1e6)},
-        {"ring_key_candidates", num(sc.ring_key_candidates, 1.0, 1e6)},
-        {"max_distance", num(sc.max_distance, 0.0, 1.0)},
-        {"max_candidates", num(sc.max_candidates, 1.0, 1e6)}}},
-      {"graph",
-       {{"max_iterations", num(g.max_iterations, 1.0, 1e6)},
-        {"window_iterations", num(g.window_iterations, 1.0, 1e6)},
-        {"window_size", num(g.window_size, 1.0, 1e9)},
-        {"huber_delta", pos(g.huber_delta, kBig)}}},
-      {"semantic_map",
-       {{"leaf_size_m", pos(be.map.leaf_size_m, 100.0)},
-        {"drop_dynamic", set(be.map.drop_dynamic)},
-        {"max_range_m", num(be.map.max_range_m, 0.0, 1e4)}}},
-  };
+  // Back-end keys without a caller's BackEndSettings go to a scratch copy,
+  // built only then.
+  std::optional<BackEndSettings> scratch;
+  if (b == nullptr) scratch.emplace();
+  detail::Targets t{s, b != nullptr ? *b : *scratch};
+  const std::map<std::string, detail::Setters>& sections = detail::sections();
   for (const auto& kv : root) {
     const std::string name = detail::key_of(kv.first, "", path);
     if (name == "deskew") {
@@ -348,15 +484,10 @@ inline void parse_settings_yaml(const std::string& text, const std::string& path
       continue;
     }
     const auto it = sections.find(name);
-    if (it != sections.end()) {
-      detail::apply(kv.second, name, it->second, path);
-      continue;
-    }
-    const auto be_it = back_end.find(name);
-    if (be_it == back_end.end()) {
+    if (it == sections.end()) {
       throw semlio::ConfigError(detail::where(path, kv.first, "unknown section '" + name + "'"));
     }
-    detail::apply(kv.second, name, be_it->second, path);
+    detail::apply(kv.second, name, it->second, t, path);
   }
 }
 

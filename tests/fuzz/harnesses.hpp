@@ -8,7 +8,8 @@
 // Where a writer exists, the result is written and read back and must match.
 //
 // The YAML settings harness lives in harness_settings_yaml.hpp (it needs
-// yaml-cpp, a dependency of the examples only).
+// yaml-cpp, a dependency of the examples only); the scan-folder and KITTI raw
+// drive logic harnesses in harnesses_folders.hpp.
 
 #include <Eigen/Core>
 
@@ -37,6 +38,7 @@
 #include <semlio/io/trajectory.hpp>
 
 #include "fuzz_support.hpp"
+#include "harnesses_folders.hpp"
 
 namespace semlio_fuzz {
 
@@ -549,6 +551,7 @@ inline constexpr Harness kHarnesses[] = {
     {"ros1_pointcloud2", fuzz_ros1_pointcloud2}, {"cdr_pointcloud2", fuzz_cdr_pointcloud2},
     {"ros1_imu", fuzz_ros1_imu}, {"cdr_imu", fuzz_cdr_imu},
     {"kitti_raw_calib", fuzz_kitti_raw_calib}, {"kitti_raw_stamps", fuzz_kitti_raw_stamps},
+    {"scan_folder", fuzz_scan_folder}, {"kitti_raw_drive", fuzz_kitti_raw_drive},
 };
 
 }  // namespace semlio_fuzz

@@ -177,3 +177,33 @@ put("kitti_raw_calib", "calib_imu_to_velo.txt", read(RAW + "calib_imu_to_velo.tx
 stamps = read(RAW + "2011_09_26_drive_0009_sync/velodyne_points/timestamps.txt").splitlines(keepends=True)
 put("kitti_raw_stamps", "first8.txt", b"".join(stamps[:8]))
 put("kitti_raw_stamps", "dropped_174-183.txt", b"".join(stamps[174:183]))
+
+# Folder logic (harnesses_folders.hpp): parts separated by '|', name lists one
+# name per line; an empty part is a file or folder that does not exist.
+# scan_folder: names | times.txt | poses.txt
+seq = "kitti/sequences/00/"
+put("scan_folder", "kitti_bin_times_poses.txt",
+    b"000002.bin\n000000.bin\n000001.bin\ntimes.txt\nposes.txt\ncalib.txt\n|" + lines(seq + "times.txt", 3) + b"|"
+    + lines(seq + "poses.txt", 3))
+put("scan_folder", "snippet_pcd_frame_numbers.txt", "\n".join(sorted(os.listdir(os.path.join(DATA, "kitti_raw/snippet_22")))) + "\n.hidden.pcd\nREADME\n")
+put("scan_folder", "ply_natural_order_gap.txt", "scan_10.ply\nscan_9.ply\nscan_100.PLY\nmap.txt\n")
+put("scan_folder", "seconds_names_tum.txt", "1317357625.123456.bin\n1317357625.2235.bin\n1317357625.0.bin\n||"
+    "1317357625.0 0 0 0 0 0 0 1\n1317357625.123456 1 0 0 0 0 0 1\n1317357625.2235 2 0 0 0 0 0 1\n")
+put("scan_folder", "nanosecond_names.txt", "1599131415123456789.pcd\n1599131415223456789.pcd\n1599131415023456789.pcd\n")
+put("scan_folder", "mixed_formats.txt", "0.pcd\n1.ply\n")
+put("scan_folder", "same_number.txt", "1.pcd\n01.pcd\n")
+# kitti_raw_drive: timestamps.txt | timestamps_start.txt | velodyne_points/data names | oxts/timestamps.txt | oxts/data names
+DRIVE = RAW + "2011_09_26_drive_0009_sync/"
+mid = read(DRIVE + "velodyne_points/timestamps.txt").splitlines(keepends=True)
+start = read(DRIVE + "velodyne_points/timestamps_start.txt").splitlines(keepends=True)
+oxts = read(DRIVE + "oxts/timestamps.txt").splitlines(keepends=True)
+bins = lambda ks: "".join("%010d.bin\n" % k for k in ks).encode()
+txts = lambda ks: "".join("%010d.txt\n" % k for k in ks).encode()
+put("kitti_raw_drive", "fewer_scans_than_oxts.txt",
+    b"".join(mid[:6]) + b"|" + b"".join(start[:6]) + b"|" + bins(range(3)) + b"|" + b"".join(oxts[:6]) + b"|" + txts(range(6)))
+put("kitti_raw_drive", "blank_lines_gap_no_start.txt",
+    b"".join(mid[174:184]) + b"||" + bins([0, 1, 3, 9]))
+put("kitti_raw_drive", "blank_lines_with_start.txt",
+    b"".join(mid[176:184]) + b"|" + b"".join(start[176:184]) + b"|" + bins(range(8)) + b"|" + b"".join(oxts[176:184])
+    + b"|" + txts([0, 2, 5]))
+put("kitti_raw_drive", "scan_beyond_lines.txt", b"".join(mid[:2]) + b"||" + bins([0, 5]))

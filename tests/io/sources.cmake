@@ -3,4 +3,5 @@
 # (include/semlio/io/kitti_raw.hpp, scan_folder.hpp).
 set(SEMLIO_TESTS_io_sources
   io/test_kitti_raw.cpp
-  io/test_scan_folder.cpp)
+  io/test_scan_folder.cpp
+  io/test_folder_plans.cpp)

@@ -153,30 +153,47 @@ inline std::vector<std::optional<double>> read_raw_stamp_lines(const std::string
   return parse_raw_stamp_lines(read_file(path), path);
 }
 
-/// Files `<digits><ext>` of a directory by number. Other extensions are
-/// ignored. Throws IoError (cannot list) and FormatError (a name that is not a
-/// number, two names with the same number), naming the file.
-inline std::map<std::uint64_t, std::string> numbered_files(const std::filesystem::path& dir, std::string_view ext) {
+/// The names `<digits><ext>` among `names` (the files of folder `dir`) by
+/// number. Other extensions are ignored. Throws FormatError (a name that is
+/// not a number, two names with the same number), naming the file.
+inline std::map<std::uint64_t, std::string> numbered_names(const std::vector<std::string>& names,
+                                                          const std::filesystem::path& dir, std::string_view ext) {
   namespace fs = std::filesystem;
   std::map<std::uint64_t, std::string> out;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (entry.path().extension() != ext) continue;
-    const std::string stem = entry.path().stem().string();
+  for (const std::string& name : names) {
+    const fs::path file(name);
+    if (file.extension() != ext) continue;
+    const std::string stem = file.stem().string();
     const auto number = to_int(stem);
     if (!number || *number < 0 || stem.find_first_not_of("0123456789") != std::string::npos) {
-      throw FormatError(where(entry.path().string(), 0, "file name is not a frame number"));
+      throw FormatError(where((dir / file).string(), 0, "file name is not a frame number"));
     }
     const auto key = static_cast<std::uint64_t>(*number);
     const auto [it, fresh] = out.emplace(key, stem);
     if (!fresh) {
-      throw FormatError(
-          where(entry.path().string(), 0,
-                "frame " + std::to_string(key) + " appears twice (also " + it->second + std::string(ext) + ")"));
+      throw FormatError(where((dir / file).string(), 0,
+                              "frame " + std::to_string(key) + " appears twice (also " + it->second +
+                                  std::string(ext) + ")"));
     }
   }
+  return out;
+}
+
+/// Names of the entries of a directory (any order). Throws IoError (cannot list).
+inline std::vector<std::string> directory_names(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) out.push_back(entry.path().filename().string());
   if (ec) throw IoError(where(dir.string(), 0, "cannot list directory: " + ec.message()));
   return out;
+}
+
+/// Files `<digits><ext>` of a directory by number (numbered_names of its
+/// listing). Throws IoError (cannot list) and FormatError (a name that is not
+/// a number, two names with the same number), naming the file.
+inline std::map<std::uint64_t, std::string> numbered_files(const std::filesystem::path& dir, std::string_view ext) {
+  return numbered_names(directory_names(dir), dir, ext);
 }
 
 /// Median of the differences between consecutive stamped lines; nullopt when
@@ -210,6 +227,148 @@ struct KittiRawDriveConfig {
   double nominal_period_s = 0.1;
 };
 
+/// What the file system gives a KittiRawDrive before it decides anything:
+/// the timestamps texts and the names in the data folders.
+struct KittiRawDriveListing {
+  std::string_view timestamps;                         ///< velodyne_points/timestamps.txt (sweep middle)
+  std::optional<std::string_view> timestamps_start;    ///< velodyne_points/timestamps_start.txt, when present
+  std::optional<std::vector<std::string>> scan_names;  ///< names in velodyne_points/data/; nullopt: no such folder
+  std::optional<std::string_view> oxts_timestamps;     ///< oxts/timestamps.txt, when present
+  std::optional<std::vector<std::string>> oxts_names;  ///< names in oxts/data/, when that folder exists
+};
+
+/// What a drive's listing decides (see the file comment): frames, their
+/// stamps and the OXTS packets present.
+struct KittiRawDrivePlan {
+  std::vector<std::string> stems;                    ///< .bin stem of frame i; empty = missing (a gap)
+  std::size_t missing = 0;                           ///< frames whose .bin is missing
+  std::vector<std::optional<double>> middle_lines;   ///< timestamps.txt, every line (nullopt: blank)
+  std::vector<std::optional<double>> start_lines;    ///< timestamps_start.txt, every line, or empty
+  std::vector<double> stamps;                        ///< sweep start of frame i [s]
+  std::vector<bool> interpolated;                    ///< frame i's stamp interpolated (blank line)
+  double period_s = 0.1;                             ///< sweep period [s] (median, else nominal)
+  std::vector<std::optional<double>> oxts_lines;     ///< oxts/timestamps.txt, every line, or empty
+  std::map<std::uint64_t, std::string> oxts_stems;   ///< OXTS packet number -> file stem
+};
+
+/// Plans a KITTI raw drive from its listing; `directory` (the drive folder)
+/// names the files in messages. KittiRawDrive runs exactly this on what it
+/// reads (the kitti_raw_drive fuzz harness runs it from memory). Throws
+/// ConfigError (nominal_period_s not positive), IoError (no
+/// velodyne_points/data/ folder), FormatError (no .bin scan, a non-numeric or
+/// repeated scan or packet name, a scan numbered beyond the lines of
+/// timestamps.txt, timestamps_start.txt with a different line count, no stamp
+/// at all), ValueError (a line blank in timestamps_start.txt whose
+/// timestamps.txt stamp goes back before an earlier line's start) plus what
+/// parse_raw_stamp_lines throws.
+inline KittiRawDrivePlan plan_kitti_raw_drive(const KittiRawDriveListing& in, const std::string& directory,
+                                              const KittiRawDriveConfig& config = {}) {
+  namespace fs = std::filesystem;
+  if (!(config.nominal_period_s > 0.0 && std::isfinite(config.nominal_period_s))) {
+    throw ConfigError("KittiRawDriveConfig.nominal_period_s must be positive and finite, got " +
+                      std::to_string(config.nominal_period_s));
+  }
+  const fs::path dir(directory);
+  const fs::path velo = dir / "velodyne_points";
+  KittiRawDrivePlan plan;
+
+  // Stamp lines.
+  plan.middle_lines = detail::parse_raw_stamp_lines(in.timestamps, (velo / "timestamps.txt").string());
+  if (in.timestamps_start) {
+    const fs::path start = velo / "timestamps_start.txt";
+    plan.start_lines = detail::parse_raw_stamp_lines(*in.timestamps_start, start.string());
+    if (plan.start_lines.size() != plan.middle_lines.size()) {
+      throw FormatError(detail::where(start.string(), 0,
+                                      "has " + std::to_string(plan.start_lines.size()) +
+                                          " lines but timestamps.txt has " + std::to_string(plan.middle_lines.size())));
+    }
+  }
+
+  // Frames: 0 .. highest .bin number, the absent ones missing.
+  const fs::path data = velo / "data";
+  if (!in.scan_names) throw IoError(detail::where(data.string(), 0, "scan directory does not exist"));
+  const auto files = detail::numbered_names(*in.scan_names, data, ".bin");
+  if (files.empty()) throw FormatError(detail::where(data.string(), 0, "no .bin scans"));
+  const std::uint64_t last = files.rbegin()->first;
+  // Bounds the frame count by the lines actually present, so a stray huge
+  // number cannot make us allocate for it.
+  if (last >= plan.middle_lines.size()) {
+    throw FormatError(detail::where((data / (files.rbegin()->second + ".bin")).string(), 0,
+                                    "frame " + std::to_string(last) + " has no line in timestamps.txt (" +
+                                        std::to_string(plan.middle_lines.size()) + " lines)"));
+  }
+  plan.stems.assign(static_cast<std::size_t>(last) + 1, std::string());
+  for (const auto& [k, stem] : files) plan.stems[static_cast<std::size_t>(k)] = stem;
+  plan.missing = plan.stems.size() - files.size();
+
+  // Stamps of every line of the drive (start, else middle - period/2), the
+  // blank ones interpolated; then the first stems.size() of them are kept.
+  const bool have_start = !plan.start_lines.empty();
+  const auto& base = have_start ? plan.start_lines : plan.middle_lines;
+  plan.period_s = detail::median_period(base).value_or(config.nominal_period_s);
+  if (!(plan.period_s > 0.0)) plan.period_s = config.nominal_period_s;  // all stamps equal: keep a usable period
+  const std::size_t n = plan.middle_lines.size();
+  std::vector<std::optional<double>> line_stamp(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (have_start && plan.start_lines[k]) {
+      line_stamp[k] = plan.start_lines[k];
+    } else if (plan.middle_lines[k]) {
+      line_stamp[k] = *plan.middle_lines[k] - 0.5 * plan.period_s;
+    }
+  }
+  std::vector<std::size_t> known;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (line_stamp[k]) known.push_back(k);
+  }
+  if (known.empty()) {
+    throw FormatError(detail::where(directory, 0, "velodyne_points/timestamps.txt has no stamp (every line is blank)"));
+  }
+  // Each file is non-decreasing on its own, but a line blank in
+  // timestamps_start.txt takes its stamp from timestamps.txt: when the two
+  // files disagree the stamps could go backwards. Refused, so the frames'
+  // stamps (interpolated ones included) never decrease.
+  for (std::size_t j = 1; j < known.size(); ++j) {
+    const std::size_t a = known[j - 1];
+    const std::size_t b = known[j];
+    if (*line_stamp[b] < *line_stamp[a]) {
+      throw ValueError(detail::where((velo / "timestamps_start.txt").string(), static_cast<long>(b) + 1,
+                                     "sweep start of line " + std::to_string(b + 1) + " is earlier than line " +
+                                         std::to_string(a + 1) +
+                                         "'s (timestamps_start.txt and timestamps.txt disagree where a line is blank)"));
+    }
+  }
+  const std::size_t frames = plan.stems.size();
+  plan.stamps.resize(frames);
+  plan.interpolated.assign(frames, false);
+  for (std::size_t i = 0; i < frames; ++i) {
+    if (line_stamp[i]) {
+      plan.stamps[i] = *line_stamp[i];
+      continue;
+    }
+    plan.interpolated[i] = true;
+    const auto after = std::lower_bound(known.begin(), known.end(), i);
+    if (after == known.begin()) {
+      plan.stamps[i] = *line_stamp[*after] - static_cast<double>(*after - i) * plan.period_s;
+    } else if (after == known.end()) {
+      const std::size_t b = known.back();
+      plan.stamps[i] = *line_stamp[b] + static_cast<double>(i - b) * plan.period_s;
+    } else {
+      const std::size_t a = *(after - 1);
+      const std::size_t b = *after;
+      const double w = static_cast<double>(i - a) / static_cast<double>(b - a);
+      plan.stamps[i] = *line_stamp[a] + w * (*line_stamp[b] - *line_stamp[a]);
+    }
+  }
+
+  // OXTS (a drive downloaded without it has no oxts/timestamps.txt).
+  if (in.oxts_timestamps) {
+    const fs::path oxts = dir / "oxts";
+    plan.oxts_lines = detail::parse_raw_stamp_lines(*in.oxts_timestamps, (oxts / "timestamps.txt").string());
+    if (in.oxts_names) plan.oxts_stems = detail::numbered_names(*in.oxts_names, oxts / "data", ".txt");
+  }
+  return plan;
+}
+
 /// A KITTI raw drive folder (`YYYY_MM_DD_drive_NNNN_sync`): the frame list,
 /// stamps and calibration are read on construction; scans and OXTS packets
 /// only when asked for. Const member functions only read files, so
@@ -223,7 +382,9 @@ class KittiRawDrive {
   /// calib_dir without calib_imu_to_velo.txt), FormatError (no .bin scan, a
   /// non-numeric or repeated scan name, a scan numbered beyond the lines of
   /// timestamps.txt, timestamps_start.txt with a different line count, no
-  /// stamp at all) plus what the timestamps and calibration readers throw.
+  /// stamp at all), ValueError (timestamps_start.txt and timestamps.txt giving
+  /// stamps that go backwards) plus what the timestamps and calibration
+  /// readers throw. The decisions are plan_kitti_raw_drive's.
   explicit KittiRawDrive(const std::string& directory, const Config& config = {}) : config_(config) {
     namespace fs = std::filesystem;
     if (!(config_.nominal_period_s > 0.0 && std::isfinite(config_.nominal_period_s))) {
@@ -233,11 +394,36 @@ class KittiRawDrive {
     fs::path dir = fs::path(directory).lexically_normal();
     if (dir.filename().empty()) dir = dir.parent_path();  // trailing '/'
     dir_ = dir.string();
+    // Read what the drive holds, then let plan_kitti_raw_drive decide (the
+    // code the kitti_raw_drive fuzz harness runs from memory).
     const fs::path velo = dir / "velodyne_points";
-    read_stamps(velo);
-    list_frames(velo / "data");
-    compute_stamps();
-    list_oxts(dir / "oxts");
+    const fs::path oxts = dir / "oxts";
+    std::error_code ec;
+    const std::string middle = detail::read_file((velo / "timestamps.txt").string());
+    std::optional<std::string> start;
+    if (fs::exists(velo / "timestamps_start.txt", ec)) {
+      start = detail::read_file((velo / "timestamps_start.txt").string());
+    }
+    KittiRawDriveListing listing;
+    listing.timestamps = middle;
+    if (start) listing.timestamps_start = *start;
+    if (fs::is_directory(velo / "data", ec)) listing.scan_names = detail::directory_names(velo / "data");
+    std::optional<std::string> oxts_stamps;
+    if (fs::exists(oxts / "timestamps.txt", ec)) {
+      oxts_stamps = detail::read_file((oxts / "timestamps.txt").string());
+      listing.oxts_timestamps = *oxts_stamps;
+      if (fs::is_directory(oxts / "data", ec)) listing.oxts_names = detail::directory_names(oxts / "data");
+    }
+    KittiRawDrivePlan plan = plan_kitti_raw_drive(listing, dir_, config_);
+    stems_ = std::move(plan.stems);
+    missing_ = plan.missing;
+    middle_lines_ = std::move(plan.middle_lines);
+    start_lines_ = std::move(plan.start_lines);
+    stamps_ = std::move(plan.stamps);
+    interpolated_ = std::move(plan.interpolated);
+    period_s_ = plan.period_s;
+    oxts_lines_ = std::move(plan.oxts_lines);
+    oxts_stems_ = std::move(plan.oxts_stems);
     find_calibration(dir);
   }
 
@@ -425,94 +611,6 @@ class KittiRawDrive {
     OxtsRecord rec;
     parse_oxts_data(detail::read_file(path), path, rec);
     return rec;
-  }
-
-  void read_stamps(const std::filesystem::path& velo) {
-    namespace fs = std::filesystem;
-    middle_lines_ = detail::read_raw_stamp_lines((velo / "timestamps.txt").string());
-    std::error_code ec;
-    const fs::path start = velo / "timestamps_start.txt";
-    if (fs::exists(start, ec)) {
-      start_lines_ = detail::read_raw_stamp_lines(start.string());
-      if (start_lines_.size() != middle_lines_.size()) {
-        throw FormatError(detail::where(start.string(), 0,
-                                        "has " + std::to_string(start_lines_.size()) +
-                                            " lines but timestamps.txt has " + std::to_string(middle_lines_.size())));
-      }
-    }
-  }
-
-  void list_frames(const std::filesystem::path& data) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (!fs::is_directory(data, ec)) throw IoError(detail::where(data.string(), 0, "scan directory does not exist"));
-    const auto files = detail::numbered_files(data, ".bin");
-    if (files.empty()) throw FormatError(detail::where(data.string(), 0, "no .bin scans"));
-    const std::uint64_t last = files.rbegin()->first;
-    // Bounds the frame count by the lines actually present, so a stray huge
-    // number cannot make us allocate for it.
-    if (last >= middle_lines_.size()) {
-      throw FormatError(detail::where((data / (files.rbegin()->second + ".bin")).string(), 0,
-                                      "frame " + std::to_string(last) + " has no line in timestamps.txt (" +
-                                          std::to_string(middle_lines_.size()) + " lines)"));
-    }
-    stems_.assign(static_cast<std::size_t>(last) + 1, std::string());
-    for (const auto& [k, stem] : files) stems_[static_cast<std::size_t>(k)] = stem;
-    missing_ = stems_.size() - files.size();
-  }
-
-  // Stamps of every line of the drive (start, else middle - period/2), the
-  // blank ones interpolated; then the first size() of them are kept.
-  void compute_stamps() {
-    const bool have_start = !start_lines_.empty();
-    const auto& base = have_start ? start_lines_ : middle_lines_;
-    period_s_ = detail::median_period(base).value_or(config_.nominal_period_s);
-    if (!(period_s_ > 0.0)) period_s_ = config_.nominal_period_s;  // all stamps equal: keep a usable period
-    const std::size_t n = middle_lines_.size();
-    std::vector<std::optional<double>> line_stamp(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      if (have_start && start_lines_[k]) {
-        line_stamp[k] = start_lines_[k];
-      } else if (middle_lines_[k]) {
-        line_stamp[k] = *middle_lines_[k] - 0.5 * period_s_;
-      }
-    }
-    std::vector<std::size_t> known;
-    for (std::size_t k = 0; k < n; ++k) {
-      if (line_stamp[k]) known.push_back(k);
-    }
-    if (known.empty()) {
-      throw FormatError(detail::where(dir_, 0, "velodyne_points/timestamps.txt has no stamp (every line is blank)"));
-    }
-    stamps_.resize(stems_.size());
-    interpolated_.assign(stems_.size(), false);
-    for (std::size_t i = 0; i < stems_.size(); ++i) {
-      if (line_stamp[i]) {
-        stamps_[i] = *line_stamp[i];
-        continue;
-      }
-      interpolated_[i] = true;
-      const auto after = std::lower_bound(known.begin(), known.end(), i);
-      if (after == known.begin()) {
-        stamps_[i] = *line_stamp[*after] - static_cast<double>(*after - i) * period_s_;
-      } else if (after == known.end()) {
-        const std::size_t b = known.back();
-        stamps_[i] = *line_stamp[b] + static_cast<double>(i - b) * period_s_;
-      } else {
-        const std::size_t a = *(after - 1);
-        const std::size_t b = *after;
-        const double w = static_cast<double>(i - a) / static_cast<double>(b - a);
-        stamps_[i] = *line_stamp[a] + w * (*line_stamp[b] - *line_stamp[a]);
-      }
-    }
-  }
-
-  void list_oxts(const std::filesystem::path& oxts) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (!fs::exists(oxts / "timestamps.txt", ec)) return;  // a drive downloaded without OXTS
-    oxts_lines_ = detail::read_raw_stamp_lines((oxts / "timestamps.txt").string());
-    if (fs::is_directory(oxts / "data", ec)) oxts_stems_ = detail::numbered_files(oxts / "data", ".txt");
   }
 
   void find_calibration(const std::filesystem::path& dir) {

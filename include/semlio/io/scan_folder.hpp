@@ -159,6 +159,151 @@ struct ScanFolderConfig {
   std::string ground_truth_path;
 };
 
+/// What a scan folder's file names and times.txt decide: format, frame
+/// order and stamps (ScanFolder's constructor, without the file system).
+struct ScanFolderPlan {
+  ScanFileFormat format = ScanFileFormat::kitti_bin;             ///< format of every scan file
+  std::vector<std::string> files;                                 ///< scan file name of frame i
+  std::vector<double> stamps;                                     ///< stamp of frame i [s] (sweep start)
+  ScanStampSource stamp_source = ScanStampSource::nominal_period;  ///< the rule that decided `stamps`
+};
+
+/// Plans the frames of a scan folder from the names of its regular files
+/// (any order; non-scan and hidden names are ignored) and the text of its
+/// times.txt (nullopt when there is none); `directory` names the folder in
+/// messages. The rules are the file comment's. Throws ConfigError
+/// (nominal_period_s not positive), FormatError (no scans, mixed formats, a
+/// name without a number, two names with the same number), ValueError
+/// (times.txt count differs from the scan count) plus what parse_kitti_times
+/// throws for malformed times. ScanFolder runs exactly this on its listing.
+inline ScanFolderPlan plan_scan_folder(const std::vector<std::string>& names,
+                                       const std::optional<std::string_view>& times_text,
+                                       const std::string& directory, const ScanFolderConfig& config = {}) {
+  namespace fs = std::filesystem;
+  if (!(config.nominal_period_s > 0.0 && std::isfinite(config.nominal_period_s))) {
+    throw ConfigError("ScanFolderConfig.nominal_period_s must be positive and finite, got " +
+                      std::to_string(config.nominal_period_s));
+  }
+  const fs::path dir(directory);
+  ScanFolderPlan plan;
+  struct Entry {
+    std::string name;
+    detail::ScanNameNumber number;
+  };
+  std::vector<Entry> entries;
+  std::string first_of[3];  // one file name per format, for the mixed-format message
+  for (const std::string& name : names) {
+    if (name.empty() || name.front() == '.') continue;
+    const fs::path file(name);
+    const std::string ext = detail::lower_extension(file);
+    int kind = -1;
+    if (ext == ".pcd") kind = 0;
+    if (ext == ".ply") kind = 1;
+    if (ext == ".bin") kind = 2;
+    if (kind < 0) continue;
+    std::string& first = first_of[static_cast<std::size_t>(kind)];
+    if (first.empty()) first = name;
+    const auto number = detail::scan_name_number(file.stem().string());
+    if (!number) {
+      throw FormatError(detail::where((dir / file).string(), 0,
+                                      "scan file name has no number to order it by (move it out of the folder)"));
+    }
+    entries.push_back({name, *number});
+  }
+  if (entries.empty()) throw FormatError(detail::where(directory, 0, "no .pcd, .ply or .bin scans"));
+  const int kinds = static_cast<int>(!first_of[0].empty()) + static_cast<int>(!first_of[1].empty()) +
+                    static_cast<int>(!first_of[2].empty());
+  if (kinds > 1) {
+    std::string listed;
+    for (const std::string& f : first_of) {
+      if (f.empty()) continue;
+      listed += (listed.empty() ? "" : ", ") + f;
+    }
+    throw FormatError(detail::where(directory, 0, "mixes scan formats (" + listed + "): keep one format per folder"));
+  }
+  plan.format = !first_of[0].empty()   ? ScanFileFormat::pcd
+                : !first_of[1].empty() ? ScanFileFormat::ply
+                                       : ScanFileFormat::kitti_bin;
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& a, const Entry& b) { return detail::compare_numbers(a.number, b.number) < 0; });
+  for (std::size_t i = 1; i < entries.size(); ++i) {
+    if (detail::compare_numbers(entries[i - 1].number, entries[i].number) == 0) {
+      throw FormatError(detail::where((dir / entries[i].name).string(), 0,
+                                      "has the same number as " + entries[i - 1].name + " (frame order is ambiguous)"));
+    }
+  }
+  std::vector<detail::ScanNameNumber> numbers;
+  numbers.reserve(entries.size());
+  plan.files.reserve(entries.size());
+  for (Entry& e : entries) {
+    plan.files.push_back(std::move(e.name));
+    numbers.push_back(std::move(e.number));
+  }
+
+  if (times_text) {
+    const std::string times = (dir / "times.txt").string();
+    plan.stamps = parse_kitti_times(*times_text, times);
+    if (plan.stamps.size() != plan.files.size()) {
+      throw ValueError(detail::where(times, 0,
+                                     "has " + std::to_string(plan.stamps.size()) + " times but the folder has " +
+                                         std::to_string(plan.files.size()) + " scans"));
+    }
+    plan.stamp_source = ScanStampSource::times_file;
+    return plan;
+  }
+  const int unit = detail::time_unit_digits(numbers.front());
+  const bool named_by_time = unit >= 0 && std::all_of(numbers.begin(), numbers.end(), [&](const auto& n) {
+                               return detail::time_unit_digits(n) == unit;
+                             });
+  plan.stamps.reserve(numbers.size());
+  if (named_by_time) {
+    for (const auto& n : numbers) plan.stamps.push_back(detail::name_seconds(n, unit));
+    plan.stamp_source = ScanStampSource::file_name;
+    return plan;
+  }
+  // Integer frame numbers below 1e9 (at most 8 digits here, 9 being a time).
+  const bool frame_numbers = std::all_of(numbers.begin(), numbers.end(),
+                                         [](const auto& n) { return n.fraction.empty() && n.integer.size() <= 8; });
+  for (std::size_t i = 0; i < numbers.size(); ++i) {
+    const double k =
+        frame_numbers ? static_cast<double>(detail::to_int(numbers[i].integer).value_or(0)) : static_cast<double>(i);
+    plan.stamps.push_back(k * config.nominal_period_s);
+  }
+  plan.stamp_source = ScanStampSource::nominal_period;
+  return plan;
+}
+
+/// Parses a scan folder's ground truth already in memory (`path` names it):
+/// TUM when the first non-blank, non-comment line has 8 fields, else KITTI
+/// 3x4; returns the lidar poses as stored. Throws ValueError when the pose
+/// count differs from `frame_count`, plus what parse_kitti_poses /
+/// parse_tum_trajectory throw.
+inline std::vector<SE3d> parse_scan_folder_ground_truth(std::string_view text, const std::string& path,
+                                                        std::size_t frame_count) {
+  // looks_like_tum's rule, on the text already read.
+  bool decided = false;
+  bool tum = false;
+  detail::for_each_line(text, [&](long, std::string_view s) {
+    if (decided) return;
+    const std::string_view t = detail::trim(s);
+    if (t.empty() || t.front() == '#') return;
+    decided = true;
+    tum = detail::split_ws(t).size() == 8;
+  });
+  std::vector<SE3d> poses;
+  if (tum) {
+    for (const StampedPose& p : parse_tum_trajectory(text, path)) poses.push_back(p.pose);
+  } else {
+    poses = parse_kitti_poses(text, path);
+  }
+  if (poses.size() != frame_count) {
+    throw ValueError(detail::where(path, 0,
+                                   "has " + std::to_string(poses.size()) + " poses but the folder has " +
+                                       std::to_string(frame_count) + " scans"));
+  }
+  return poses;
+}
+
 /// A folder of scans: the file list, order and stamps are decided on
 /// construction; scans and ground truth are read only when asked for. Const
 /// member functions only read files, so concurrent calls are safe.
@@ -170,7 +315,8 @@ class ScanFolder {
   /// IoError (no such folder, explicit ground truth missing), FormatError (no
   /// scans, mixed formats, a name without a number, two names with the same
   /// number) and ValueError (times.txt count differs from the scan count),
-  /// plus what read_kitti_times throws for a malformed times.txt.
+  /// plus what read_kitti_times throws for a malformed times.txt. The
+  /// decisions are plan_scan_folder's.
   explicit ScanFolder(const std::string& directory, const Config& config = {}) : config_(config) {
     namespace fs = std::filesystem;
     if (!(config_.nominal_period_s > 0.0 && std::isfinite(config_.nominal_period_s))) {
@@ -180,8 +326,19 @@ class ScanFolder {
     fs::path dir = fs::path(directory).lexically_normal();
     if (dir.filename().empty()) dir = dir.parent_path();  // trailing '/'
     dir_ = dir.string();
-    list_files(dir);
-    decide_stamps(dir);
+    // The file system gives the names and times.txt; plan_scan_folder decides
+    // (the code the scan_folder fuzz harness runs from memory).
+    const std::vector<std::string> names = list_regular_files(dir);
+    std::error_code ec;
+    const fs::path times = dir / "times.txt";
+    std::optional<std::string> times_text;
+    if (fs::is_regular_file(times, ec)) times_text = detail::read_file(times.string());
+    ScanFolderPlan plan = plan_scan_folder(
+        names, times_text ? std::optional<std::string_view>(*times_text) : std::nullopt, dir_, config_);
+    format_ = plan.format;
+    files_ = std::move(plan.files);
+    stamps_ = std::move(plan.stamps);
+    source_ = plan.stamp_source;
     discover_ground_truth(dir);
   }
 
@@ -254,18 +411,7 @@ class ScanFolder {
   /// count, plus what read_kitti_poses / read_tum_trajectory throw.
   [[nodiscard]] std::vector<SE3d> ground_truth_lidar() const {
     if (gt_path_.empty()) throw IoError(detail::where(dir_, 0, "no ground truth (poses.txt) for this folder"));
-    std::vector<SE3d> poses;
-    if (looks_like_tum(gt_path_)) {
-      for (const StampedPose& p : read_tum_trajectory(gt_path_)) poses.push_back(p.pose);
-    } else {
-      poses = read_kitti_poses(gt_path_);
-    }
-    if (poses.size() != size()) {
-      throw ValueError(detail::where(
-          gt_path_, 0,
-          "has " + std::to_string(poses.size()) + " poses but the folder has " + std::to_string(size()) + " scans"));
-    }
-    return poses;
+    return parse_scan_folder_ground_truth(detail::read_file(gt_path_), gt_path_, size());
   }
   /// ground_truth_lidar() (the brief name; the same poses).
   [[nodiscard]] std::vector<SE3d> ground_truth() const { return ground_truth_lidar(); }
@@ -278,99 +424,18 @@ class ScanFolder {
     }
   }
 
-  void list_files(const std::filesystem::path& dir) {
+  // Names of the regular files in `dir` (any order).
+  static std::vector<std::string> list_regular_files(const std::filesystem::path& dir) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) throw IoError(detail::where(dir.string(), 0, "scan folder does not exist"));
-    struct Entry {
-      std::string name;
-      detail::ScanNameNumber number;
-    };
-    std::vector<Entry> entries;
-    std::string first_of[3];  // one file name per format, for the mixed-format message
+    std::vector<std::string> names;
     for (const auto& entry : fs::directory_iterator(dir, ec)) {
-      const std::string name = entry.path().filename().string();
-      if (name.empty() || name.front() == '.') continue;
-      const std::string ext = detail::lower_extension(entry.path());
-      int kind = -1;
-      if (ext == ".pcd") kind = 0;
-      if (ext == ".ply") kind = 1;
-      if (ext == ".bin") kind = 2;
       std::error_code ec_file;
-      if (kind < 0 || !entry.is_regular_file(ec_file)) continue;
-      std::string& first = first_of[static_cast<std::size_t>(kind)];
-      if (first.empty()) first = name;
-      const auto number = detail::scan_name_number(entry.path().stem().string());
-      if (!number) {
-        throw FormatError(detail::where(entry.path().string(), 0,
-                                        "scan file name has no number to order it by (move it out of the folder)"));
-      }
-      entries.push_back({name, *number});
+      if (entry.is_regular_file(ec_file)) names.push_back(entry.path().filename().string());
     }
     if (ec) throw IoError(detail::where(dir.string(), 0, "cannot list directory: " + ec.message()));
-    if (entries.empty()) throw FormatError(detail::where(dir.string(), 0, "no .pcd, .ply or .bin scans"));
-    const int kinds = static_cast<int>(!first_of[0].empty()) + static_cast<int>(!first_of[1].empty()) +
-                      static_cast<int>(!first_of[2].empty());
-    if (kinds > 1) {
-      std::string names;
-      for (const std::string& f : first_of) {
-        if (f.empty()) continue;
-        names += (names.empty() ? "" : ", ") + f;
-      }
-      throw FormatError(
-          detail::where(dir.string(), 0, "mixes scan formats (" + names + "): keep one format per folder"));
-    }
-    format_ = !first_of[0].empty()   ? ScanFileFormat::pcd
-              : !first_of[1].empty() ? ScanFileFormat::ply
-                                     : ScanFileFormat::kitti_bin;
-    std::sort(entries.begin(), entries.end(),
-              [](const Entry& a, const Entry& b) { return detail::compare_numbers(a.number, b.number) < 0; });
-    for (std::size_t i = 1; i < entries.size(); ++i) {
-      if (detail::compare_numbers(entries[i - 1].number, entries[i].number) == 0) {
-        throw FormatError(
-            detail::where((dir / entries[i].name).string(), 0,
-                          "has the same number as " + entries[i - 1].name + " (frame order is ambiguous)"));
-      }
-    }
-    for (Entry& e : entries) {
-      files_.push_back(std::move(e.name));
-      numbers_.push_back(std::move(e.number));
-    }
-  }
-
-  void decide_stamps(const std::filesystem::path& dir) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    const fs::path times = dir / "times.txt";
-    if (fs::is_regular_file(times, ec)) {
-      stamps_ = read_kitti_times(times.string());
-      if (stamps_.size() != files_.size()) {
-        throw ValueError(detail::where(times.string(), 0,
-                                       "has " + std::to_string(stamps_.size()) + " times but the folder has " +
-                                           std::to_string(files_.size()) + " scans"));
-      }
-      source_ = ScanStampSource::times_file;
-      return;
-    }
-    const int unit = detail::time_unit_digits(numbers_.front());
-    const bool named_by_time = unit >= 0 && std::all_of(numbers_.begin(), numbers_.end(), [&](const auto& n) {
-                                 return detail::time_unit_digits(n) == unit;
-                               });
-    stamps_.reserve(files_.size());
-    if (named_by_time) {
-      for (const auto& n : numbers_) stamps_.push_back(detail::name_seconds(n, unit));
-      source_ = ScanStampSource::file_name;
-      return;
-    }
-    // Integer frame numbers below 1e9 (at most 8 digits here, 9 being a time).
-    const bool frame_numbers = std::all_of(numbers_.begin(), numbers_.end(),
-                                           [](const auto& n) { return n.fraction.empty() && n.integer.size() <= 8; });
-    for (std::size_t i = 0; i < numbers_.size(); ++i) {
-      const double k =
-          frame_numbers ? static_cast<double>(detail::to_int(numbers_[i].integer).value_or(0)) : static_cast<double>(i);
-      stamps_.push_back(k * config_.nominal_period_s);
-    }
-    source_ = ScanStampSource::nominal_period;
+    return names;
   }
 
   void discover_ground_truth(const std::filesystem::path& dir) {
@@ -390,7 +455,6 @@ class ScanFolder {
   std::string dir_;
   ScanFileFormat format_ = ScanFileFormat::kitti_bin;
   std::vector<std::string> files_;  // file name of frame i
-  std::vector<detail::ScanNameNumber> numbers_;
   std::vector<double> stamps_;
   ScanStampSource source_ = ScanStampSource::nominal_period;
   std::string gt_path_;

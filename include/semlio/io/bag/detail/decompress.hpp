@@ -12,6 +12,7 @@
 #include <lz4frame.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstddef>
@@ -61,20 +62,61 @@ inline void check_expansion(std::uint64_t in_size, std::uint64_t uncompressed_si
   }
 }
 
-/// bz2 stream `in` into exactly `uncompressed_size` bytes of `out`.
+/// Largest expansion of a bz2 stream: a block's Burrows-Wheeler data holds at
+/// most 900 000 bytes, whose run-length coding gives back at most 259 bytes
+/// per 5 (a run of 4 plus a count of 255), 46 620 000 bytes; and every block
+/// costs at least its 6-byte magic and 4-byte CRC, so 10 compressed bytes
+/// never give more than 46 620 000.
+inline constexpr std::uint64_t kMaxBz2Ratio = 4662000;
+
+/// bz2 stream `in` into exactly `uncompressed_size` bytes of `out`. The
+/// output grows with what the stream actually produces (never beyond the
+/// stated size), so a chunk header that lies about its size costs no
+/// allocation of that size, and a stream that would expand beyond it stops
+/// there: both are a FormatError.
 inline void decompress_bz2(const std::uint8_t* in, std::size_t in_size, std::uint64_t uncompressed_size,
                            std::vector<std::uint8_t>& out, const std::string& what) {
   check_chunk_size(uncompressed_size, what);
+  check_expansion(in_size, uncompressed_size, kMaxBz2Ratio, "bz2", what);
   if (in_size > std::numeric_limits<unsigned int>::max()) throw FormatError(what + ": bz2 chunk too large");
-  out.resize(static_cast<std::size_t>(uncompressed_size));
-  auto dest_len = static_cast<unsigned int>(uncompressed_size);
-  // bzlib takes non-const pointers but does not write through `source`.
-  const int rc = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(out.data()), &dest_len,
-                                            const_cast<char*>(reinterpret_cast<const char*>(in)),
-                                            static_cast<unsigned int>(in_size), 0, 0);
-  if (rc != BZ_OK) throw FormatError(what + ": bz2 data is corrupt (bzlib error " + std::to_string(rc) + ")");
-  if (dest_len != uncompressed_size) {
-    throw FormatError(what + ": bz2 chunk decompresses to " + std::to_string(dest_len) + " bytes, header says " +
+  const auto total = static_cast<std::size_t>(uncompressed_size);  // <= kMaxChunkBytes (2^31)
+  bz_stream strm{};
+  if (BZ2_bzDecompressInit(&strm, 0, 0) != BZ_OK) throw FormatError(what + ": cannot start bz2 decompression");
+  const std::unique_ptr<bz_stream, int (*)(bz_stream*)> end(&strm, &BZ2_bzDecompressEnd);
+  // bzlib takes non-const pointers but does not write through next_in.
+  strm.next_in = const_cast<char*>(reinterpret_cast<const char*>(in));
+  strm.avail_in = static_cast<unsigned int>(in_size);
+  // First guess: 4x the input (point clouds compress 2-3x), then doubling.
+  std::size_t capacity = std::min(total, std::max<std::size_t>(std::size_t{1} << 16, 4 * in_size));
+  out.clear();
+  out.resize(capacity);
+  std::size_t produced = 0;
+  for (;;) {
+    strm.next_out = reinterpret_cast<char*>(out.data() + produced);
+    strm.avail_out = static_cast<unsigned int>(capacity - produced);  // <= 2^31
+    const unsigned int in_before = strm.avail_in;
+    const unsigned int out_before = strm.avail_out;
+    const int rc = BZ2_bzDecompress(&strm);
+    produced += out_before - strm.avail_out;
+    if (rc == BZ_STREAM_END) break;
+    if (rc != BZ_OK) throw FormatError(what + ": bz2 data is corrupt (bzlib error " + std::to_string(rc) + ")");
+    if (strm.avail_in == in_before && strm.avail_out == out_before) {
+      // No progress: the input is used up before the end-of-stream marker,
+      // or the output is full and the stream has more.
+      if (produced == total) {
+        throw FormatError(what + ": bz2 chunk decompresses to more than the " + std::to_string(total) +
+                          " bytes the header states");
+      }
+      throw FormatError(what + ": bz2 data ends before its end-of-stream marker after " + std::to_string(produced) +
+                        " bytes (truncated?)");
+    }
+    if (produced == capacity && capacity < total) {
+      capacity = std::min(total, 2 * capacity);
+      out.resize(capacity);
+    }
+  }
+  if (produced != total) {
+    throw FormatError(what + ": bz2 chunk decompresses to " + std::to_string(produced) + " bytes, header says " +
                       std::to_string(uncompressed_size));
   }
 }
