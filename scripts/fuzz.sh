@@ -10,9 +10,10 @@
 #   HARNESS              a subset (default: all the build holds): kitti_bin
 #                        kitti_label kitti_calib kitti_times kitti_poses tum
 #                        pcd ply oxts g2o ros1_pointcloud2 cdr_pointcloud2
-#                        ros1_imu cdr_imu settings_yaml, and with the bag
-#                        libraries (bz2, lz4, zstd, sqlite3) rosbag1 mcap
-#                        sqlite_bag
+#                        ros1_imu cdr_imu kitti_raw_calib kitti_raw_stamps
+#                        scan_folder kitti_raw_drive settings_yaml, and with
+#                        the bag libraries (bz2, lz4, zstd, sqlite3) rosbag1
+#                        mcap sqlite_bag (SEMLIO_FUZZ_HARNESS=list prints them)
 # The must-hold (issue #36): `scripts/fuzz.sh 300` finds nothing and runs
 # >= 1 million executions per harness (>= 3400 exec/s) on the 2-core VM.
 # Environment: SEMLIO_FUZZ_BUILD_DIR (default ${TMPDIR:-/tmp}/semlio_build_fuzz),
