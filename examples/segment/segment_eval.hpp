@@ -19,6 +19,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include <semlio/concepts.hpp>
@@ -154,9 +155,11 @@ struct FrameResult {
 
 /// Reads one labelled scan, applies KITTI's vertical-angle fix when
 /// `kitti_correction` (semlio_kitti / semlio_run do so on real KITTI scans
-/// before segmenting), segments it and scores it against its labels.
+/// before segmenting), segments it and scores it against its labels. When
+/// `segmented` is given it receives the scan with the segmenter's labels.
 template <semlio::Segmenter S>
-FrameResult evaluate_frame(const LabelledFrame& frame, const S& segmenter, bool kitti_correction) {
+FrameResult evaluate_frame(const LabelledFrame& frame, const S& segmenter, bool kitti_correction,
+                           semlio::Scan* segmented = nullptr) {
   semlio::Scan scan = semlio::io::read_kitti_scan(frame.bin_path, frame.label_path);
   const std::vector<semlio::Class> truth = scan.labels;
   if (kitti_correction) semlio::correct_kitti_vertical_angle(scan, semlio::kKittiVerticalCorrectionRad);
@@ -167,6 +170,7 @@ FrameResult evaluate_frame(const LabelledFrame& frame, const S& segmenter, bool 
   segmenter.segment(scan);
   r.segment_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   r.matrix.add(truth, scan.labels);
+  if (segmented != nullptr) *segmented = std::move(scan);
   return r;
 }
 

@@ -7,6 +7,7 @@
 //   semlio_segment_eval --sequence DIR [--labels-dir DIR] [--first F] [--last L]
 //                       [--frames N] [--kitti-correction on|off]
 //                       [--merged-ground] [--markdown | --tsv] [--confusion]
+//                       [--write-labels OUT_DIR]
 //   semlio_segment_eval --kitti-bin FILE.bin [--repeat N]
 //
 // Simulated worlds: simulates a drive of N * K frames (in memory, nothing is
@@ -27,7 +28,10 @@
 // real KITTI scans before segmenting (--kitti-correction off: raw points).
 // Prints per-class IoU (19 classes and the six coarse classes) per scan and
 // pooled over all scans; --markdown prints the same as markdown tables;
-// --confusion adds, per true class, where its pooled points went.
+// --confusion adds, per true class, where its pooled points went;
+// --write-labels writes the predictions as OUT_DIR/NNNNNN.label
+// (SemanticKITTI format, one label per point of the .bin; KITTI scans have no
+// NaN or (0,0,0) points, which the reader would drop).
 //
 // --tsv (both modes) prints the pooled IoUs as `name<TAB>value` lines (19
 // classes, mIoU, the six coarse classes as coarse:<name>, coarse mIoU; "-"
@@ -45,6 +49,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <initializer_list>
 #include <limits>
 #include <string>
@@ -70,6 +75,7 @@ int usage() {
                "                           [--tsv]\n"
                "       semlio_segment_eval --sequence DIR [--labels-dir DIR] [--first F] [--last L] [--frames N]\n"
                "                           [--kitti-correction on|off] [--merged-ground] [--markdown | --tsv] [--confusion]\n"
+               "                           [--write-labels OUT_DIR]\n"
                "       semlio_segment_eval --kitti-bin FILE.bin [--repeat N]\n");
   return 2;
 }
@@ -236,6 +242,7 @@ int main(int argc, char** argv) {
   bool kitti_correction = true;
   std::string sequence;
   std::string labels_dir;
+  std::string write_labels;
   std::uint64_t first = 0;
   std::uint64_t last = std::numeric_limits<std::uint64_t>::max();
   bool merged = false;
@@ -276,6 +283,8 @@ int main(int argc, char** argv) {
         confusion = true;
       } else if (a == "--sequence") {
         sequence = value();
+      } else if (a == "--write-labels") {
+        write_labels = value();
       } else if (a == "--labels-dir") {
         labels_dir = value();
       } else if (a == "--first") {
@@ -313,7 +322,13 @@ int main(int argc, char** argv) {
       semlio::eval::ConfusionMatrix pooled;
       std::vector<double> ms;
       for (const semlio_examples::LabelledFrame& f : list) {
-        semlio_examples::FrameResult fr = semlio_examples::evaluate_frame(f, seg, kitti_correction);
+        semlio::Scan segmented;
+        semlio_examples::FrameResult fr = semlio_examples::evaluate_frame(f, seg, kitti_correction, &segmented);
+        if (!write_labels.empty()) {
+          std::filesystem::create_directories(write_labels);
+          segmented.instances.clear();  // the truth's instance ids, not the segmenter's
+          semlio::io::write_label_file(write_labels + "/" + f.name + ".label", semlio::io::raw_labels(segmented));
+        }
         pooled.merge(fr.matrix);
         ms.push_back(fr.segment_ms);
         cols.emplace_back(fr.name, fr.matrix);

@@ -19,8 +19,8 @@
 ///    (0.4 m cells) with per-cell heights above ground, grouped into
 ///    8-connected components, classified in this order:
 ///    - below `min_object_height_m` -> kUnlabeled (clutter);
-///    - car-sized (smallest-area footprint 2-6.5 m x <= 2.6 m, top 1.35-2.3 m,
-///      reaching down below 0.7 m, mostly over road) -> kCar;
+///    - car-sized (smallest-area footprint 2-6.5 m x <= 2.8 m, top 1.35-2.3 m,
+///      reaching down below 0.7 m, at least 30 % over road) -> kCar;
 ///    - truck-sized boxes (5-12 m x <= 3.2 m, top 2.5-4.5 m and in view,
 ///      flat-topped, over road) -> kTruck;
 ///    - thin (<= 1 m) and tall columns -> kTrunk when at least
@@ -84,11 +84,11 @@ struct GeometricSegmenterConfig {
   double min_object_height_m = 0.3;  ///< components lower than this stay unlabeled [m]
   double car_min_length_m = 2.0;     ///< car footprint length range (visible part) [m]
   double car_max_length_m = 6.5;
-  double car_max_width_m = 2.6;      ///< car footprint width limit [m]
+  double car_max_width_m = 2.8;      ///< car footprint width limit [m]: a 2.0 m body with mirrors, plus up to a 0.4 m cell of quantisation per side
   double car_min_height_m = 1.35;    ///< car height range above ground [m]
   double car_max_height_m = 2.3;
   double car_max_base_m = 0.7;       ///< a car reaches down to at least this height [m]
-  double car_min_road_fraction = 0.5;  ///< cars stand on the road: this share of their points at least
+  double car_min_road_fraction = 0.3;  ///< cars stand on the road: this share of their points at least (a car parked with two wheels on the curb, or in a bay the ground walk calls sidewalk, has half or less over road)
   double truck_min_length_m = 5.0;   ///< truck/bus footprint length range (visible part) [m]
   double truck_max_length_m = 12.0;
   double truck_max_width_m = 3.2;    ///< truck footprint width limit [m]
