@@ -30,8 +30,9 @@
 ///      rails), car-height rows standing on road -> kCar (cars parked in a
 ///      row merge into one component), else kVegetation (hedges, bushes);
 ///    - tall and extended: split by cell. Wall cells (reaching down below
-///      1.9 m, top >= 2.5 m, >= 1.5 m tall) in runs wider than a column ->
-///      kBuilding; thin columns standing on the ground -> kTrunk (its points
+///      1.9 m, top >= 2.5 m, >= 1.5 m tall) in runs wider than a column
+///      whose points lie mostly on locally planar surfaces (foliage is
+///      rough; `wall_max_roughness_m`) -> kBuilding; thin columns standing on the ground -> kTrunk (its points
 ///      above the canopy base are vegetation) or kPole; the rest (canopy)
 ///      -> kVegetation.
 ///    Heights are judged knowing the field of view: a cell whose top reaches
@@ -108,6 +109,17 @@ struct GeometricSegmenterConfig {
   double stem_max_base_m = 0.8;      ///< a cell with a point below this height stands on the ground [m]
   double wall_max_base_m = 1.9;      ///< wall cells reach down at least this low (a wall over a parked car) [m]
   double wall_min_span_m = 1.5;      ///< wall cells have at least this vertical extent [m]
+  /// A run of wall cells is a wall only when most of its points lie in
+  /// planar cells: the points of a cell and its 8 neighbours (a 1.2 m
+  /// square) spread at most this much across their best-fitting vertical
+  /// plane (standard deviation) [m]. A wall's spread is range noise (~0.02 m
+  /// on an HDL-64E) plus window and door recesses (up to ~0.1 m over 1.2 m);
+  /// the visible surface of foliage (hedges, tree crowns) is rough on the
+  /// scale of its leaves and twigs, 0.1-0.3 m. Wall corners are rough too,
+  /// hence the vote over the run rather than a per-cell test.
+  double wall_max_roughness_m = 0.15;
+  /// Fewest points (cell and neighbours) to judge roughness; fewer are taken as planar.
+  int roughness_min_points = 8;
   double top_beam_elevation_rad = 0.0349;  ///< elevation of the highest beam (HDL-64E: +2 deg) [rad]
   double clip_margin_m = 0.15;       ///< a cell reaching within this of the highest visible height is cut off by the field of view [m]
 };
@@ -404,6 +416,46 @@ class GeometricSegmenter {
     return (a1 - a0) * std::max(ref.norm(), 0.5F * grid_.cell_size_m());
   }
 
+  // Spread of the points of cell c and its occupied 8 neighbours across
+  // their best-fitting vertical plane: the standard deviation along the
+  // minor axis of their horizontal covariance [m]; 0 with too few points.
+  float roughness_m(std::uint32_t c) const {
+    const int side = grid_.side();
+    const int ix = static_cast<int>(c) % side;
+    const int iy = static_cast<int>(c) / side;
+    const float cell = grid_.cell_size_m();
+    double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = ix + dx;
+        const int ny = iy + dy;
+        if (nx < 0 || ny < 0 || nx >= side || ny >= side) continue;
+        const detail::GridCell& g = grid_.cell(static_cast<std::uint32_t>(ny * side + nx));
+        if (g.count == 0) continue;
+        // Shift the neighbour's moments to cell c's centre.
+        const double m = g.count;
+        const double ox = dx * cell;
+        const double oy = dy * cell;
+        n += m;
+        sx += g.sx_m + m * ox;
+        sy += g.sy_m + m * oy;
+        sxx += g.sxx_m2 + 2.0 * ox * g.sx_m + m * ox * ox;
+        syy += g.syy_m2 + 2.0 * oy * g.sy_m + m * oy * oy;
+        sxy += g.sxy_m2 + ox * g.sy_m + oy * g.sx_m + m * ox * oy;
+      }
+    }
+    if (n < static_cast<double>(config_.roughness_min_points)) return 0.0F;
+    const double mx = sx / n;
+    const double my = sy / n;
+    const double cxx = sxx / n - mx * mx;
+    const double cyy = syy / n - my * my;
+    const double cxy = sxy / n - mx * my;
+    // Smaller eigenvalue of [[cxx, cxy], [cxy, cyy]].
+    const double half_trace = 0.5 * (cxx + cyy);
+    const double minor = half_trace - std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
+    return static_cast<float>(std::sqrt(std::max(0.0, minor)));
+  }
+
   // Largest side of the axis-aligned box around the cells in stack_ [m].
   float stack_size_m() const {
     float a0 = std::numeric_limits<float>::infinity(), a1 = -a0, b0 = a0, b1 = -a0;
@@ -450,6 +502,15 @@ class GeometricSegmenter {
       if (grid_.cell(seed).mark >= 0 || !is_wall(seed)) continue;
       grow(seed, mark++, is_wall);
       if (stack_size_m() <= f(cfg.pole_max_diameter_m)) continue;
+      // Foliage, not a wall, when most of the run's points lie in rough cells
+      // (a run-level vote: corners and recesses of a wall are rough too).
+      std::uint64_t rough = 0, all = 0;
+      for (const std::uint32_t c : stack_) {
+        const std::uint32_t m = grid_.cell(c).count;
+        all += m;
+        rough += roughness_m(c) > f(cfg.wall_max_roughness_m) ? m : 0U;
+      }
+      if (2 * rough > all) continue;
       for (const std::uint32_t c : stack_) {
         grid_.cell(c).label = id(Class::kBuilding);
         grid_.cell(c).upper_label = id(Class::kBuilding);
