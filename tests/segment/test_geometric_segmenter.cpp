@@ -176,6 +176,52 @@ TEST_CASE("GeometricSegmenter handles degenerate scans", "[segment]") {
   }
 }
 
+// Flat ground around the sensor and an 8 m long vertical surface 10 m ahead,
+// 0.3-3.5 m above the ground (tall, too long for a car or truck): a planar wall, or the same footprint with a rough face (points spread
+// uniformly over 0.6 m in depth, std 0.17 m, as foliage).
+namespace {
+semlio::Scan wall_scene(bool rough) {
+  semlio::Scan scan;
+  const float ground_z = -static_cast<float>(semlio_test::kSceneSensorHeight);
+  for (float x = -9.0F; x <= 9.5F; x += 0.2F) {
+    for (float y = -9.0F; y <= 9.0F; y += 0.2F) {
+      if (std::hypot(x, y) > 2.0F) scan.points.emplace_back(x, y, ground_z);
+    }
+  }
+  std::uint32_t state = 12345U;
+  for (float y = -4.0F; y <= 4.0F; y += 0.05F) {
+    for (float h = 0.3F; h <= 3.5F; h += 0.1F) {
+      state = state * 1664525U + 1013904223U;  // LCG: a fixed pseudo-random depth
+      const float depth = rough ? 0.6F * static_cast<float>(state >> 8) / 16777216.0F : 0.0F;
+      scan.points.emplace_back(10.0F + depth, y, ground_z + h);
+    }
+  }
+  return scan;
+}
+}  // namespace
+
+TEST_CASE("GeometricSegmenter tells a planar wall from a rough hedge of the same shape", "[segment]") {
+  const semlio::GeometricSegmenter seg;
+  for (const bool rough : {false, true}) {
+    semlio::Scan scan = wall_scene(rough);
+    seg.segment(scan);
+    std::size_t n = 0, building = 0, vegetation = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      if (scan.points[i].x() < 9.9F) continue;
+      ++n;
+      building += scan.labels[i] == Class::kBuilding ? 1U : 0U;
+      vegetation += scan.labels[i] == Class::kVegetation ? 1U : 0U;
+    }
+    INFO("rough " << rough << ": " << n << " points, " << building << " building, " << vegetation << " vegetation");
+    REQUIRE(n > 2000);
+    if (rough) {
+      CHECK(vegetation > 9 * n / 10);
+    } else {
+      CHECK(building > 9 * n / 10);
+    }
+  }
+}
+
 TEST_CASE("GeometricSegmenter rejects bad configs", "[segment]") {
   CHECK_THROWS_AS(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.cell_size_m = 0.0}), semlio::ConfigError);
   CHECK_THROWS_AS(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.sectors = 0}), semlio::ConfigError);

@@ -433,15 +433,17 @@ class GeometricSegmenter {
         const detail::GridCell& g = grid_.cell(static_cast<std::uint32_t>(ny * side + nx));
         if (g.count == 0) continue;
         // Shift the neighbour's moments to cell c's centre.
-        const double m = g.count;
-        const double ox = dx * cell;
-        const double oy = dy * cell;
+        const auto m = static_cast<double>(g.count);
+        const double ox = dx * static_cast<double>(cell);
+        const double oy = dy * static_cast<double>(cell);
+        const auto gx = static_cast<double>(g.sx_m);
+        const auto gy = static_cast<double>(g.sy_m);
         n += m;
-        sx += g.sx_m + m * ox;
-        sy += g.sy_m + m * oy;
-        sxx += g.sxx_m2 + 2.0 * ox * g.sx_m + m * ox * ox;
-        syy += g.syy_m2 + 2.0 * oy * g.sy_m + m * oy * oy;
-        sxy += g.sxy_m2 + ox * g.sy_m + oy * g.sx_m + m * ox * oy;
+        sx += gx + m * ox;
+        sy += gy + m * oy;
+        sxx += static_cast<double>(g.sxx_m2) + 2.0 * ox * gx + m * ox * ox;
+        syy += static_cast<double>(g.syy_m2) + 2.0 * oy * gy + m * oy * oy;
+        sxy += static_cast<double>(g.sxy_m2) + ox * gy + oy * gx + m * ox * oy;
       }
     }
     if (n < static_cast<double>(config_.roughness_min_points)) return 0.0F;
