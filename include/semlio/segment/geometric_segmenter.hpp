@@ -107,6 +107,15 @@ struct GeometricSegmenterConfig {
   double rail_min_length_m = 30.0;   ///< ... when at least this long [m]
   double building_min_height_m = 2.5;  ///< wall cells reach at least this high [m]
   double stem_max_base_m = 0.8;      ///< a cell with a point below this height stands on the ground [m]
+  /// Within a group of ground-standing cells too wide for a column (a pole
+  /// in a bush), cells at least this tall are searched for columns [m]:
+  /// above most shrubs and hedges beside a footpath, below any pole, sign
+  /// post or trunk under a canopy (trunk_min_height_m).
+  double stem_min_cell_height_m = 1.2;
+  /// ... and such a column must rise at least this far above the rest of
+  /// its group [m]: a pole or trunk over a bush, not the higher parts of a
+  /// hedge or shrub (their tops vary by a few decimetres).
+  double stem_min_prominence_m = 1.0;
   double wall_max_base_m = 1.9;      ///< wall cells reach down at least this low (a wall over a parked car) [m]
   double wall_min_span_m = 1.5;      ///< wall cells have at least this vertical extent [m]
   /// A run of wall cells is a wall only when most of its points lie in
@@ -523,12 +532,15 @@ class GeometricSegmenter {
       const detail::GridCell& g = grid_.cell(c);
       return g.h_min_m <= f(cfg.stem_max_base_m) && g.label != id(Class::kBuilding);
     };
-    const std::int32_t first_stem = mark;
-    for (std::uint32_t k = comp.begin; k < comp.end; ++k) {
-      const std::uint32_t seed = order[k];
-      if (grid_.cell(seed).mark >= first_stem || !is_stem(seed)) continue;
-      grow(seed, mark++, is_stem);
-      if (stack_size_m() > f(cfg.pole_max_diameter_m)) continue;
+    // Of those, the cells that are themselves tall: a pole or trunk standing
+    // in a bush or hedge joins the low cells around it into a group too wide
+    // for a column; its own cells still rise above them.
+    const auto is_tall_stem = [&](std::uint32_t c) {
+      return is_stem(c) && top_m(c) >= f(cfg.stem_min_cell_height_m);
+    };
+    // Labels the cells in stack_ as a column (trunk or pole) when they form one.
+    const auto label_column = [&](bool under_canopy) {
+      if (stack_size_m() > f(cfg.pole_max_diameter_m)) return false;
       bool touches_wall = false;
       for (const std::uint32_t c : stack_) {
         visit_neighbours(c, [&](std::uint32_t nc) { touches_wall |= grid_.cell(nc).label == id(Class::kBuilding); });
@@ -538,11 +550,11 @@ class GeometricSegmenter {
           grid_.cell(c).label = id(Class::kBuilding);
           grid_.cell(c).upper_label = id(Class::kBuilding);
         }
-        continue;
+        return true;
       }
       float top = -std::numeric_limits<float>::infinity();
       for (const std::uint32_t c : stack_) top = std::max(top, top_m(c));
-      const bool thick = stack_width_m() >= f(cfg.trunk_min_width_m);
+      const bool thick = under_canopy || stack_width_m() >= f(cfg.trunk_min_width_m);
       if (thick && top >= f(cfg.trunk_min_height_m)) {
         for (const std::uint32_t c : stack_) {
           grid_.cell(c).label = id(Class::kTrunk);
@@ -553,6 +565,51 @@ class GeometricSegmenter {
           grid_.cell(c).label = id(Class::kPole);
           grid_.cell(c).upper_label = id(Class::kPole);
         }
+      }
+      return true;
+    };
+    const std::int32_t first_stem = mark;
+    for (std::uint32_t k = comp.begin; k < comp.end; ++k) {
+      const std::uint32_t seed = order[k];
+      if (grid_.cell(seed).mark >= first_stem || !is_stem(seed)) continue;
+      grow(seed, mark++, is_stem);
+      if (label_column(false)) continue;
+      // Too wide: look for tall thin columns inside the group, unless it
+      // leans on a wall (the foot of a building is no place to look for poles).
+      bool by_wall = false;
+      for (const std::uint32_t c : stack_) {
+        visit_neighbours(c, [&](std::uint32_t nc) { by_wall |= grid_.cell(nc).label == id(Class::kBuilding); });
+      }
+      if (by_wall) continue;
+      group_.assign(stack_.begin(), stack_.end());
+      const std::int32_t first_tall = mark;
+      for (const std::uint32_t c : group_) {
+        if (grid_.cell(c).mark >= first_tall || !is_tall_stem(c)) continue;
+        const std::int32_t sub = mark++;
+        grow(c, sub, is_tall_stem);
+        // A column rises well above the rest of its group (a pole over a
+        // bush); the higher parts of a hedge or a shrub do not.
+        float top = -std::numeric_limits<float>::infinity();
+        float rest = -std::numeric_limits<float>::infinity();
+        for (const std::uint32_t o : group_) {
+          // Visible heights: near columns are cut off by the field of view.
+          float& h = grid_.cell(o).mark == sub ? top : rest;
+          h = std::max(h, grid_.cell(o).h_max_m);
+        }
+        if (top < rest + f(cfg.stem_min_prominence_m)) continue;
+        // Under a crown (raised cells on most sides of a column cell) it is a
+        // trunk however thin; a pole carries at most a sign or a lamp arm on
+        // one side.
+        int raised = 0;
+        for (const std::uint32_t o : stack_) {
+          int around = 0;
+          visit_neighbours(o, [&](std::uint32_t nc) {
+            const detail::GridCell& g = grid_.cell(nc);
+            around += g.count > 0 && g.h_min_m > f(cfg.stem_max_base_m) ? 1 : 0;
+          });
+          raised = std::max(raised, around);
+        }
+        if (raised >= 5 || raised <= 2) label_column(raised >= 5);
       }
     }
   }
@@ -590,6 +647,7 @@ class GeometricSegmenter {
   mutable std::vector<detail::GroundKind> kind_;
   mutable std::vector<std::int32_t> cell_of_;
   mutable std::vector<std::uint32_t> stack_;
+  mutable std::vector<std::uint32_t> group_;
 };
 
 static_assert(Segmenter<GeometricSegmenter>);
