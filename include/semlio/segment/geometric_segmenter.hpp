@@ -32,9 +32,12 @@
 ///    - tall and extended: split by cell. Wall cells (reaching down below
 ///      1.9 m, top >= 2.5 m, >= 1.5 m tall) in runs wider than a column
 ///      whose points lie mostly on locally planar surfaces (foliage is
-///      rough; `wall_max_roughness_m`) -> kBuilding; thin columns standing on the ground -> kTrunk (its points
-///      above the canopy base are vegetation) or kPole; the rest (canopy)
-///      -> kVegetation.
+///      rough; `wall_max_roughness_m`) -> kBuilding; thin columns standing
+///      on the ground -> kTrunk (its points above the canopy base are
+///      vegetation) or kPole (also a column of tall cells inside a wider
+///      group of ground-standing cells that rises 1 m above the rest, e.g. a
+///      pole in a bush: trunk when a crown surrounds it, pole when at most a
+///      sign or an arm is beside it); the rest (canopy) -> kVegetation.
 ///    Heights are judged knowing the field of view: a cell whose top reaches
 ///    the highest beam (+2 deg) counts as taller than any threshold (a wall
 ///    10 m away looks only ~2 m tall to a 64-beam KITTI lidar).
@@ -609,6 +612,7 @@ class GeometricSegmenter {
           });
           raised = std::max(raised, around);
         }
+        // 3-4 raised neighbours are neither: left to vegetation.
         if (raised >= 5 || raised <= 2) label_column(raised >= 5);
       }
     }
