@@ -20,7 +20,8 @@
 ///    8-connected components, classified in this order:
 ///    - below `min_object_height_m` -> kUnlabeled (clutter);
 ///    - car-sized (smallest-area footprint 2-6.5 m x <= 2.8 m, top 1.35-2.3 m,
-///      reaching down below 0.7 m, at least 30 % over road) -> kCar;
+///      reaching down below 0.7 m, at least half over road, or 30 % when its
+///      surface is not foliage-rough: parked on a curb or in a bay) -> kCar;
 ///    - truck-sized boxes (5-12 m x <= 3.2 m, top 2.5-4.5 m and in view,
 ///      flat-topped, over road) -> kTruck;
 ///    - thin (<= 1 m) and tall columns -> kTrunk when at least
@@ -93,6 +94,7 @@ struct GeometricSegmenterConfig {
   double car_max_height_m = 2.3;
   double car_max_base_m = 0.7;       ///< a car reaches down to at least this height [m]
   double car_min_road_fraction = 0.3;  ///< cars stand on the road: this share of their points at least (a car parked with two wheels on the curb, or in a bay the ground walk calls sidewalk, has half or less over road)
+  double car_row_min_road_fraction = 0.5;  ///< cars parked in a row (merged into one component) stand on the road: this share of their points at least (a long low component partly off the road is more often a hedge)
   double truck_min_length_m = 5.0;   ///< truck/bus footprint length range (visible part) [m]
   double truck_max_length_m = 12.0;
   double truck_max_width_m = 3.2;    ///< truck footprint width limit [m]
@@ -353,7 +355,11 @@ class GeometricSegmenter {
     if (e.h_max_m < f(c.min_object_height_m)) return set_all(comp, Class::kUnlabeled);
     if (e.length_m >= f(c.car_min_length_m) && e.length_m <= f(c.car_max_length_m) && e.width_m <= f(c.car_max_width_m) &&
         e.h_max_m >= f(c.car_min_height_m) && e.h_max_m <= f(c.car_max_height_m) && e.h_min_m <= f(c.car_max_base_m) &&
-        e.road_fraction >= f(c.car_min_road_fraction)) {
+        e.road_fraction >= f(c.car_min_road_fraction) &&
+        (e.road_fraction >= f(c.car_row_min_road_fraction) || !mostly_rough(comp))) {
+      // Partly off the road (parked on a curb or in a bay): only when its
+      // surface is not foliage-rough, so a car-sized bush at the verge stays
+      // vegetation.
       return set_all(comp, Class::kCar);
     }
     float top = e.h_max_m;
@@ -381,7 +387,7 @@ class GeometricSegmenter {
         return set_all(comp, Class::kFence);
       }
       if (e.h_max_m >= f(c.car_min_height_m) && e.width_m <= f(c.car_max_width_m) && e.h_min_m <= f(c.car_max_base_m) &&
-          e.road_fraction >= f(c.car_min_road_fraction)) {
+          e.road_fraction >= f(c.car_row_min_road_fraction)) {
         return set_all(comp, Class::kCar);  // cars parked in a row, merged into one component
       }
       return set_all(comp, Class::kVegetation);
@@ -468,6 +474,19 @@ class GeometricSegmenter {
     const double half_trace = 0.5 * (cxx + cyy);
     const double minor = half_trace - std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
     return static_cast<float>(std::sqrt(std::max(0.0, minor)));
+  }
+
+  // True when most points of the component lie in rough cells (roughness_m
+  // above wall_max_roughness_m): foliage rather than a wall or a body.
+  bool mostly_rough(const detail::GridComponent& comp) const {
+    std::uint64_t rough = 0, all = 0;
+    for (std::uint32_t k = comp.begin; k < comp.end; ++k) {
+      const std::uint32_t c = grid_.order()[k];
+      const std::uint32_t m = grid_.cell(c).count;
+      all += m;
+      rough += roughness_m(c) > static_cast<float>(config_.wall_max_roughness_m) ? m : 0U;
+    }
+    return 2 * rough > all;
   }
 
   // Largest side of the axis-aligned box around the cells in stack_ [m].
