@@ -111,8 +111,8 @@ struct LabelledFrame {
 /// their labels in `labels_dir` (empty: dir/labels), frame numbers in
 /// [first, last], at most `max_frames` of them (0: all), by frame number.
 /// Files whose stem is not all digits are not frames. Throws IoError when
-/// velodyne/ is missing, when a chosen scan has no label file (naming it) or
-/// when no frame is left.
+/// velodyne/ is missing or cannot be listed, when a chosen scan has no label
+/// file (naming it) or when no frame is left.
 inline std::vector<LabelledFrame> list_labelled_frames(const std::string& dir, std::string labels_dir,
                                                        std::uint64_t first, std::uint64_t last,
                                                        std::size_t max_frames) {
@@ -122,9 +122,13 @@ inline std::vector<LabelledFrame> list_labelled_frames(const std::string& dir, s
   std::error_code ec;
   if (!fs::is_directory(velodyne, ec)) throw semlio::IoError("no velodyne/ folder in '" + dir + "'");
   std::vector<LabelledFrame> frames;
-  for (const fs::directory_entry& e : fs::directory_iterator(velodyne)) {
-    const fs::path& p = e.path();
-    if (p.extension() != ".bin" || !e.is_regular_file()) continue;
+  fs::directory_iterator it(velodyne, ec);
+  if (ec) throw semlio::IoError("cannot list '" + velodyne.string() + "': " + ec.message());
+  for (; it != fs::directory_iterator(); it.increment(ec)) {
+    if (ec) throw semlio::IoError("cannot list '" + velodyne.string() + "': " + ec.message());
+    const fs::path& p = it->path();
+    std::error_code type_ec;
+    if (p.extension() != ".bin" || !it->is_regular_file(type_ec)) continue;
     const std::string stem = p.stem().string();
     // At most 19 digits: fits in uint64 without overflow.
     if (stem.empty() || stem.size() > 19 || stem.find_first_not_of("0123456789") != std::string::npos) continue;
