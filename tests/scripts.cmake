@@ -28,7 +28,8 @@ semlio_add_script_test(kitti_raw_consistency ${CMAKE_COMMAND} -E env REPORT_ONLY
 # Every bundled g2o graph reaches its reference chi2 within 1e-6 (a real check).
 semlio_add_script_test(pgo_validate ${SEMLIO_BASH} scripts/pgo_validate.sh "${PROJECT_BINARY_DIR}")
 # GeometricSegmenter mIoU table, 2 frames per world.
-semlio_add_script_test(segmenter_miou ${SEMLIO_BASH} scripts/segmenter_miou.sh 2 1)
+semlio_add_script_test(segmenter_miou ${SEMLIO_BASH} scripts/segmenter_miou.sh 2 1
+  tests/data/kitti/sequences/00 tests/data/kitti/semantickitti_00_labels)
 
 # The paper's evaluation on small drives: docs/results_quick.md must be what
 # this build produces (scripts/reproduce.sh --quick regenerates it).

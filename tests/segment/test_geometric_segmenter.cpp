@@ -176,6 +176,93 @@ TEST_CASE("GeometricSegmenter handles degenerate scans", "[segment]") {
   }
 }
 
+// Flat ground around the sensor and an 8 m long vertical surface 10 m ahead,
+// 0.3-3.5 m above the ground (tall, too long for a car or truck): a planar
+// wall, or the same footprint with a rough face (points spread uniformly over 0.6 m in depth, std 0.17 m, as foliage).
+namespace {
+semlio::Scan wall_scene(bool rough) {
+  semlio::Scan scan;
+  const float ground_z = -static_cast<float>(semlio_test::kSceneSensorHeight);
+  for (float x = -9.0F; x <= 9.5F; x += 0.2F) {
+    for (float y = -9.0F; y <= 9.0F; y += 0.2F) {
+      if (std::hypot(x, y) > 2.0F) scan.points.emplace_back(x, y, ground_z);
+    }
+  }
+  std::uint32_t state = 12345U;
+  for (float y = -4.0F; y <= 4.0F; y += 0.05F) {
+    for (float h = 0.3F; h <= 3.5F; h += 0.1F) {
+      state = state * 1664525U + 1013904223U;  // LCG: a fixed pseudo-random depth
+      const float depth = rough ? 0.6F * static_cast<float>(state >> 8) / 16777216.0F : 0.0F;
+      scan.points.emplace_back(10.0F + depth, y, ground_z + h);
+    }
+  }
+  return scan;
+}
+}  // namespace
+
+TEST_CASE("GeometricSegmenter tells a planar wall from a rough hedge of the same shape", "[segment]") {
+  const semlio::GeometricSegmenter seg;
+  for (const bool rough : {false, true}) {
+    semlio::Scan scan = wall_scene(rough);
+    seg.segment(scan);
+    std::size_t n = 0, building = 0, vegetation = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      if (scan.points[i].x() < 9.9F) continue;
+      ++n;
+      building += scan.labels[i] == Class::kBuilding ? 1U : 0U;
+      vegetation += scan.labels[i] == Class::kVegetation ? 1U : 0U;
+    }
+    INFO("rough " << rough << ": " << n << " points, " << building << " building, " << vegetation << " vegetation");
+    REQUIRE(n > 2000);
+    if (rough) {
+      CHECK(vegetation > 9 * n / 10);
+    } else {
+      CHECK(building > 9 * n / 10);
+    }
+  }
+}
+
+TEST_CASE("GeometricSegmenter finds a pole standing in a bush", "[segment]") {
+  // Flat ground, a 1.6 m x 1.6 m bush 0.2-0.9 m high 8 m ahead and a 4 m
+  // pole (0.1 m thick) in a gap in its middle: one group of ground-standing
+  // cells too wide for a column.
+  semlio::Scan scan;
+  const float ground_z = -static_cast<float>(semlio_test::kSceneSensorHeight);
+  for (float x = -9.0F; x <= 9.5F; x += 0.2F) {
+    for (float y = -9.0F; y <= 9.0F; y += 0.2F) {
+      if (std::hypot(x, y) > 2.0F) scan.points.emplace_back(x, y, ground_z);
+    }
+  }
+  for (float x = 7.2F; x <= 8.8F; x += 0.1F) {
+    for (float y = -0.8F; y <= 0.8F; y += 0.1F) {
+      // Not in the pole's own grid cells (x 7.6-8.0, y -0.4-0.4): bush points
+      // there would widen the column past a pole's width (it would be a trunk).
+      if (std::fabs(x - 8.0F) < 0.45F && std::fabs(y) < 0.45F) continue;
+      for (float h = 0.2F; h <= 0.9F; h += 0.1F) scan.points.emplace_back(x, y, ground_z + h);
+    }
+  }
+  const std::size_t pole_begin = scan.points.size();
+  for (float h = 0.2F; h <= 4.0F; h += 0.05F) {
+    for (const float y : {-0.05F, 0.0F, 0.05F}) scan.points.emplace_back(7.95F, y, ground_z + h);
+  }
+  const std::size_t pole_end = scan.points.size();
+  const semlio::GeometricSegmenter seg;
+  seg.segment(scan);
+  std::size_t pole = 0;
+  for (std::size_t i = pole_begin; i < pole_end; ++i) pole += scan.labels[i] == Class::kPole ? 1U : 0U;
+  CHECK(pole > 9 * (pole_end - pole_begin) / 10);
+  // The bush away from the pole stays vegetation.
+  std::size_t bush = 0, bush_veg = 0;
+  for (std::size_t i = 0; i < pole_begin; ++i) {
+    const Eigen::Vector3f& q = scan.points[i];
+    if (q.z() < ground_z + 0.3F || q.x() < 7.0F) continue;
+    ++bush;
+    bush_veg += scan.labels[i] == Class::kVegetation ? 1U : 0U;
+  }
+  REQUIRE(bush > 500);
+  CHECK(bush_veg > 9 * bush / 10);
+}
+
 TEST_CASE("GeometricSegmenter rejects bad configs", "[segment]") {
   CHECK_THROWS_AS(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.cell_size_m = 0.0}), semlio::ConfigError);
   CHECK_THROWS_AS(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.sectors = 0}), semlio::ConfigError);

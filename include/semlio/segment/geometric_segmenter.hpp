@@ -19,8 +19,9 @@
 ///    (0.4 m cells) with per-cell heights above ground, grouped into
 ///    8-connected components, classified in this order:
 ///    - below `min_object_height_m` -> kUnlabeled (clutter);
-///    - car-sized (smallest-area footprint 2-6.5 m x <= 2.6 m, top 1.35-2.3 m,
-///      reaching down below 0.7 m, mostly over road) -> kCar;
+///    - car-sized (smallest-area footprint 2-6.5 m x <= 2.8 m, top 1.35-2.3 m,
+///      reaching down below 0.7 m, at least half over road, or 30 % when its
+///      surface is not foliage-rough: parked on a curb or in a bay) -> kCar;
 ///    - truck-sized boxes (5-12 m x <= 3.2 m, top 2.5-4.5 m and in view,
 ///      flat-topped, over road) -> kTruck;
 ///    - thin (<= 1 m) and tall columns -> kTrunk when at least
@@ -30,10 +31,14 @@
 ///      rails), car-height rows standing on road -> kCar (cars parked in a
 ///      row merge into one component), else kVegetation (hedges, bushes);
 ///    - tall and extended: split by cell. Wall cells (reaching down below
-///      1.9 m, top >= 2.5 m, >= 1.5 m tall) in runs wider than a column ->
-///      kBuilding; thin columns standing on the ground -> kTrunk (its points
-///      above the canopy base are vegetation) or kPole; the rest (canopy)
-///      -> kVegetation.
+///      1.9 m, top >= 2.5 m, >= 1.5 m tall) in runs wider than a column
+///      whose points lie mostly on locally planar surfaces (foliage is
+///      rough; `wall_max_roughness_m`) -> kBuilding; thin columns standing
+///      on the ground -> kTrunk (its points above the canopy base are
+///      vegetation) or kPole (also a column of tall cells inside a wider
+///      group of ground-standing cells that rises 1 m above the rest, e.g. a
+///      pole in a bush: trunk when a crown surrounds it, pole when at most a
+///      sign or an arm is beside it); the rest (canopy) -> kVegetation.
 ///    Heights are judged knowing the field of view: a cell whose top reaches
 ///    the highest beam (+2 deg) counts as taller than any threshold (a wall
 ///    10 m away looks only ~2 m tall to a 64-beam KITTI lidar).
@@ -84,11 +89,12 @@ struct GeometricSegmenterConfig {
   double min_object_height_m = 0.3;  ///< components lower than this stay unlabeled [m]
   double car_min_length_m = 2.0;     ///< car footprint length range (visible part) [m]
   double car_max_length_m = 6.5;
-  double car_max_width_m = 2.6;      ///< car footprint width limit [m]
+  double car_max_width_m = 2.8;      ///< car footprint width limit [m]: a 2.0 m body with mirrors, plus up to a 0.4 m cell of quantisation per side
   double car_min_height_m = 1.35;    ///< car height range above ground [m]
   double car_max_height_m = 2.3;
   double car_max_base_m = 0.7;       ///< a car reaches down to at least this height [m]
-  double car_min_road_fraction = 0.5;  ///< cars stand on the road: this share of their points at least
+  double car_min_road_fraction = 0.3;  ///< cars stand on the road: this share of their points at least (a car parked with two wheels on the curb, or in a bay the ground walk calls sidewalk, has half or less over road)
+  double car_row_min_road_fraction = 0.5;  ///< cars parked in a row (merged into one component) stand on the road: this share of their points at least (a long low component partly off the road is more often a hedge)
   double truck_min_length_m = 5.0;   ///< truck/bus footprint length range (visible part) [m]
   double truck_max_length_m = 12.0;
   double truck_max_width_m = 3.2;    ///< truck footprint width limit [m]
@@ -106,8 +112,28 @@ struct GeometricSegmenterConfig {
   double rail_min_length_m = 30.0;   ///< ... when at least this long [m]
   double building_min_height_m = 2.5;  ///< wall cells reach at least this high [m]
   double stem_max_base_m = 0.8;      ///< a cell with a point below this height stands on the ground [m]
+  /// Within a group of ground-standing cells too wide for a column (a pole
+  /// in a bush), cells at least this tall are searched for columns [m]:
+  /// above most shrubs and hedges beside a footpath, below any pole, sign
+  /// post or trunk under a canopy (trunk_min_height_m).
+  double stem_min_cell_height_m = 1.2;
+  /// ... and such a column must rise at least this far above the rest of
+  /// its group [m]: a pole or trunk over a bush, not the higher parts of a
+  /// hedge or shrub (their tops vary by a few decimetres).
+  double stem_min_prominence_m = 1.0;
   double wall_max_base_m = 1.9;      ///< wall cells reach down at least this low (a wall over a parked car) [m]
   double wall_min_span_m = 1.5;      ///< wall cells have at least this vertical extent [m]
+  /// A run of wall cells is a wall only when most of its points lie in
+  /// planar cells: the points of a cell and its 8 neighbours (a 1.2 m
+  /// square) spread at most this much across their best-fitting vertical
+  /// plane (standard deviation) [m]. A wall's spread is range noise (~0.02 m
+  /// on an HDL-64E) plus window and door recesses (up to ~0.1 m over 1.2 m);
+  /// the visible surface of foliage (hedges, tree crowns) is rough on the
+  /// scale of its leaves and twigs, 0.1-0.3 m. Wall corners are rough too,
+  /// hence the vote over the run rather than a per-cell test.
+  double wall_max_roughness_m = 0.15;
+  /// Fewest points (cell and neighbours) to judge roughness; fewer are taken as planar.
+  int roughness_min_points = 8;
   double top_beam_elevation_rad = 0.0349;  ///< elevation of the highest beam (HDL-64E: +2 deg) [rad]
   double clip_margin_m = 0.15;       ///< a cell reaching within this of the highest visible height is cut off by the field of view [m]
 };
@@ -329,7 +355,11 @@ class GeometricSegmenter {
     if (e.h_max_m < f(c.min_object_height_m)) return set_all(comp, Class::kUnlabeled);
     if (e.length_m >= f(c.car_min_length_m) && e.length_m <= f(c.car_max_length_m) && e.width_m <= f(c.car_max_width_m) &&
         e.h_max_m >= f(c.car_min_height_m) && e.h_max_m <= f(c.car_max_height_m) && e.h_min_m <= f(c.car_max_base_m) &&
-        e.road_fraction >= f(c.car_min_road_fraction)) {
+        e.road_fraction >= f(c.car_min_road_fraction) &&
+        (e.road_fraction >= f(c.car_row_min_road_fraction) || !mostly_rough(comp))) {
+      // Partly off the road (parked on a curb or in a bay): only when its
+      // surface is not foliage-rough, so a car-sized bush at the verge stays
+      // vegetation.
       return set_all(comp, Class::kCar);
     }
     float top = e.h_max_m;
@@ -357,7 +387,7 @@ class GeometricSegmenter {
         return set_all(comp, Class::kFence);
       }
       if (e.h_max_m >= f(c.car_min_height_m) && e.width_m <= f(c.car_max_width_m) && e.h_min_m <= f(c.car_max_base_m) &&
-          e.road_fraction >= f(c.car_min_road_fraction)) {
+          e.road_fraction >= f(c.car_row_min_road_fraction)) {
         return set_all(comp, Class::kCar);  // cars parked in a row, merged into one component
       }
       return set_all(comp, Class::kVegetation);
@@ -402,6 +432,61 @@ class GeometricSegmenter {
       a1 = std::max(a1, az + grid_.cell(c).t_max_m / r);
     }
     return (a1 - a0) * std::max(ref.norm(), 0.5F * grid_.cell_size_m());
+  }
+
+  // Spread of the points of cell c and its occupied 8 neighbours across
+  // their best-fitting vertical plane: the standard deviation along the
+  // minor axis of their horizontal covariance [m]; 0 with too few points.
+  float roughness_m(std::uint32_t c) const {
+    const int side = grid_.side();
+    const int ix = static_cast<int>(c) % side;
+    const int iy = static_cast<int>(c) / side;
+    const float cell = grid_.cell_size_m();
+    double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = ix + dx;
+        const int ny = iy + dy;
+        if (nx < 0 || ny < 0 || nx >= side || ny >= side) continue;
+        const detail::GridCell& g = grid_.cell(static_cast<std::uint32_t>(ny * side + nx));
+        if (g.count == 0) continue;
+        // Shift the neighbour's moments to cell c's centre.
+        const auto m = static_cast<double>(g.count);
+        const double ox = dx * static_cast<double>(cell);
+        const double oy = dy * static_cast<double>(cell);
+        const auto gx = static_cast<double>(g.sx_m);
+        const auto gy = static_cast<double>(g.sy_m);
+        n += m;
+        sx += gx + m * ox;
+        sy += gy + m * oy;
+        sxx += static_cast<double>(g.sxx_m2) + 2.0 * ox * gx + m * ox * ox;
+        syy += static_cast<double>(g.syy_m2) + 2.0 * oy * gy + m * oy * oy;
+        sxy += static_cast<double>(g.sxy_m2) + ox * gy + oy * gx + m * ox * oy;
+      }
+    }
+    if (n < static_cast<double>(config_.roughness_min_points)) return 0.0F;
+    const double mx = sx / n;
+    const double my = sy / n;
+    const double cxx = sxx / n - mx * mx;
+    const double cyy = syy / n - my * my;
+    const double cxy = sxy / n - mx * my;
+    // Smaller eigenvalue of [[cxx, cxy], [cxy, cyy]].
+    const double half_trace = 0.5 * (cxx + cyy);
+    const double minor = half_trace - std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
+    return static_cast<float>(std::sqrt(std::max(0.0, minor)));
+  }
+
+  // True when most points of the component lie in rough cells (roughness_m
+  // above wall_max_roughness_m): foliage rather than a wall or a body.
+  bool mostly_rough(const detail::GridComponent& comp) const {
+    std::uint64_t rough = 0, all = 0;
+    for (std::uint32_t k = comp.begin; k < comp.end; ++k) {
+      const std::uint32_t c = grid_.order()[k];
+      const std::uint32_t m = grid_.cell(c).count;
+      all += m;
+      rough += roughness_m(c) > static_cast<float>(config_.wall_max_roughness_m) ? m : 0U;
+    }
+    return 2 * rough > all;
   }
 
   // Largest side of the axis-aligned box around the cells in stack_ [m].
@@ -450,6 +535,15 @@ class GeometricSegmenter {
       if (grid_.cell(seed).mark >= 0 || !is_wall(seed)) continue;
       grow(seed, mark++, is_wall);
       if (stack_size_m() <= f(cfg.pole_max_diameter_m)) continue;
+      // Foliage, not a wall, when most of the run's points lie in rough cells
+      // (a run-level vote: corners and recesses of a wall are rough too).
+      std::uint64_t rough = 0, all = 0;
+      for (const std::uint32_t c : stack_) {
+        const std::uint32_t m = grid_.cell(c).count;
+        all += m;
+        rough += roughness_m(c) > f(cfg.wall_max_roughness_m) ? m : 0U;
+      }
+      if (2 * rough > all) continue;
       for (const std::uint32_t c : stack_) {
         grid_.cell(c).label = id(Class::kBuilding);
         grid_.cell(c).upper_label = id(Class::kBuilding);
@@ -460,12 +554,15 @@ class GeometricSegmenter {
       const detail::GridCell& g = grid_.cell(c);
       return g.h_min_m <= f(cfg.stem_max_base_m) && g.label != id(Class::kBuilding);
     };
-    const std::int32_t first_stem = mark;
-    for (std::uint32_t k = comp.begin; k < comp.end; ++k) {
-      const std::uint32_t seed = order[k];
-      if (grid_.cell(seed).mark >= first_stem || !is_stem(seed)) continue;
-      grow(seed, mark++, is_stem);
-      if (stack_size_m() > f(cfg.pole_max_diameter_m)) continue;
+    // Of those, the cells that are themselves tall: a pole or trunk standing
+    // in a bush or hedge joins the low cells around it into a group too wide
+    // for a column; its own cells still rise above them.
+    const auto is_tall_stem = [&](std::uint32_t c) {
+      return is_stem(c) && top_m(c) >= f(cfg.stem_min_cell_height_m);
+    };
+    // Labels the cells in stack_ as a column (trunk or pole) when they form one.
+    const auto label_column = [&](bool under_canopy) {
+      if (stack_size_m() > f(cfg.pole_max_diameter_m)) return false;
       bool touches_wall = false;
       for (const std::uint32_t c : stack_) {
         visit_neighbours(c, [&](std::uint32_t nc) { touches_wall |= grid_.cell(nc).label == id(Class::kBuilding); });
@@ -475,11 +572,11 @@ class GeometricSegmenter {
           grid_.cell(c).label = id(Class::kBuilding);
           grid_.cell(c).upper_label = id(Class::kBuilding);
         }
-        continue;
+        return true;
       }
       float top = -std::numeric_limits<float>::infinity();
       for (const std::uint32_t c : stack_) top = std::max(top, top_m(c));
-      const bool thick = stack_width_m() >= f(cfg.trunk_min_width_m);
+      const bool thick = under_canopy || stack_width_m() >= f(cfg.trunk_min_width_m);
       if (thick && top >= f(cfg.trunk_min_height_m)) {
         for (const std::uint32_t c : stack_) {
           grid_.cell(c).label = id(Class::kTrunk);
@@ -490,6 +587,52 @@ class GeometricSegmenter {
           grid_.cell(c).label = id(Class::kPole);
           grid_.cell(c).upper_label = id(Class::kPole);
         }
+      }
+      return true;
+    };
+    const std::int32_t first_stem = mark;
+    for (std::uint32_t k = comp.begin; k < comp.end; ++k) {
+      const std::uint32_t seed = order[k];
+      if (grid_.cell(seed).mark >= first_stem || !is_stem(seed)) continue;
+      grow(seed, mark++, is_stem);
+      if (label_column(false)) continue;
+      // Too wide: look for tall thin columns inside the group, unless it
+      // leans on a wall (the foot of a building is no place to look for poles).
+      bool by_wall = false;
+      for (const std::uint32_t c : stack_) {
+        visit_neighbours(c, [&](std::uint32_t nc) { by_wall |= grid_.cell(nc).label == id(Class::kBuilding); });
+      }
+      if (by_wall) continue;
+      group_.assign(stack_.begin(), stack_.end());
+      const std::int32_t first_tall = mark;
+      for (const std::uint32_t c : group_) {
+        if (grid_.cell(c).mark >= first_tall || !is_tall_stem(c)) continue;
+        const std::int32_t sub = mark++;
+        grow(c, sub, is_tall_stem);
+        // A column rises well above the rest of its group (a pole over a
+        // bush); the higher parts of a hedge or a shrub do not.
+        float top = -std::numeric_limits<float>::infinity();
+        float rest = -std::numeric_limits<float>::infinity();
+        for (const std::uint32_t o : group_) {
+          // Visible heights: near columns are cut off by the field of view.
+          float& h = grid_.cell(o).mark == sub ? top : rest;
+          h = std::max(h, grid_.cell(o).h_max_m);
+        }
+        if (top < rest + f(cfg.stem_min_prominence_m)) continue;
+        // Under a crown (raised cells on most sides of a column cell) it is a
+        // trunk however thin; a pole carries at most a sign or a lamp arm on
+        // one side.
+        int raised = 0;
+        for (const std::uint32_t o : stack_) {
+          int around = 0;
+          visit_neighbours(o, [&](std::uint32_t nc) {
+            const detail::GridCell& g = grid_.cell(nc);
+            around += g.count > 0 && g.h_min_m > f(cfg.stem_max_base_m) ? 1 : 0;
+          });
+          raised = std::max(raised, around);
+        }
+        // 3-4 raised neighbours are neither: left to vegetation.
+        if (raised >= 5 || raised <= 2) label_column(raised >= 5);
       }
     }
   }
@@ -527,6 +670,7 @@ class GeometricSegmenter {
   mutable std::vector<detail::GroundKind> kind_;
   mutable std::vector<std::int32_t> cell_of_;
   mutable std::vector<std::uint32_t> stack_;
+  mutable std::vector<std::uint32_t> group_;
 };
 
 static_assert(Segmenter<GeometricSegmenter>);

@@ -22,6 +22,11 @@ struct GridCell {
   float z_max_m = -std::numeric_limits<float>::infinity(); ///< highest point in the sensor frame [m]
   float t_min_m = std::numeric_limits<float>::infinity();  ///< lowest offset across the line of sight [m]
   float t_max_m = -std::numeric_limits<float>::infinity(); ///< highest offset across the line of sight [m]
+  float sx_m = 0.0F;    ///< sum of the points' x offsets from the cell centre [m]
+  float sy_m = 0.0F;    ///< sum of the points' y offsets from the cell centre [m]
+  float sxx_m2 = 0.0F;  ///< sum of squared x offsets [m^2]
+  float syy_m2 = 0.0F;  ///< sum of squared y offsets [m^2]
+  float sxy_m2 = 0.0F;  ///< sum of x offset times y offset [m^2]
   std::uint32_t count = 0;                                 ///< points in the cell
   std::uint32_t road_count = 0;                            ///< of which stand over ground the walk found to be road
   std::int32_t component = -1;                             ///< component id (-1: none)
@@ -77,9 +82,19 @@ class ObstacleGrid {
     g.h_min_m = std::min(g.h_min_m, h_m);
     g.h_max_m = std::max(g.h_max_m, h_m);
     g.z_max_m = std::max(g.z_max_m, z_m);
+    // Horizontal spread (moments about the cell centre, small numbers in
+    // float): how planar the surface through this cell is.
+    const Eigen::Vector2f mid = centre(static_cast<std::uint32_t>(c));
+    const float dx = x_m - mid.x();
+    const float dy = y_m - mid.y();
+    g.sx_m += dx;
+    g.sy_m += dy;
+    g.sxx_m2 += dx * dx;
+    g.syy_m2 += dy * dy;
+    g.sxy_m2 += dx * dy;
     // Offset across the line of sight through the cell centre: the visible
     // width of a column (a trunk looks wider than a pole).
-    const Eigen::Vector2f u = centre(static_cast<std::uint32_t>(c)).normalized();
+    const Eigen::Vector2f u = mid.normalized();
     const float t = u.x() * y_m - u.y() * x_m;
     g.t_min_m = std::min(g.t_min_m, t);
     g.t_max_m = std::max(g.t_max_m, t);

@@ -1,0 +1,77 @@
+# semlio_segment_eval --sequence on the two real labelled KITTI 00 scans of
+# tests/data: the markdown tables and the TSV lines are well formed (19 class
+# rows and 6 coarse rows, one column per scan plus "all"), every IoU is "-" or
+# a number in [0, 1], and a bad option value exits 2.
+# Variables: TOOL (the binary), DATA_DIR (tests/data).
+cmake_minimum_required(VERSION 3.21)
+set(seq "${DATA_DIR}/kitti/sequences/00")
+set(lab "${DATA_DIR}/kitti/semantickitti_00_labels")
+
+function(check_value text what)
+  if(NOT text STREQUAL "-")
+    if(NOT text MATCHES "^[01]\\.[0-9][0-9][0-9]$" OR text GREATER 1.0)
+      message(FATAL_ERROR "${what}: '${text}' is not an IoU in [0, 1]")
+    endif()
+  endif()
+endfunction()
+
+execute_process(COMMAND "${TOOL}" --sequence "${seq}" --labels-dir "${lab}" --markdown
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "--markdown exited ${rc}: ${err}")
+endif()
+string(REPLACE "\n" ";" lines "${out}")
+set(rows 0)
+set(headers 0)
+foreach(line IN LISTS lines)
+  if(line STREQUAL "")
+    continue()
+  endif()
+  if(line MATCHES "^\\| (class|coarse class) \\| 000000 \\| 000001 \\| all \\|$")
+    math(EXPR headers "${headers} + 1")
+  elseif(line STREQUAL "|---|---|---|---|")
+  elseif(line MATCHES "^\\| ([^|]+) \\| ([^ ]+) \\| ([^ ]+) \\| ([^ ]+) \\|$")
+    math(EXPR rows "${rows} + 1")
+    check_value("${CMAKE_MATCH_2}" "${CMAKE_MATCH_1}")
+    check_value("${CMAKE_MATCH_3}" "${CMAKE_MATCH_1}")
+    check_value("${CMAKE_MATCH_4}" "${CMAKE_MATCH_1}")
+  else()
+    message(FATAL_ERROR "unexpected markdown line: '${line}'")
+  endif()
+endforeach()
+# 19 classes + mIoU, 6 coarse classes + coarse mIoU.
+if(NOT headers EQUAL 2 OR NOT rows EQUAL 27)
+  message(FATAL_ERROR "expected 2 table headers and 27 rows, got ${headers} and ${rows}:\n${out}")
+endif()
+
+execute_process(COMMAND "${TOOL}" --sequence "${seq}" --labels-dir "${lab}" --tsv --last 0
+                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "--tsv exited ${rc}: ${err}")
+endif()
+string(REPLACE "\n" ";" lines "${out}")
+set(rows 0)
+foreach(line IN LISTS lines)
+  if(line STREQUAL "")
+    continue()
+  endif()
+  if(NOT line MATCHES "^([a-z:/ -]+|mIoU|coarse mIoU)\t([^\t]+)$")
+    message(FATAL_ERROR "unexpected TSV line: '${line}'")
+  endif()
+  check_value("${CMAKE_MATCH_2}" "${CMAKE_MATCH_1}")
+  math(EXPR rows "${rows} + 1")
+endforeach()
+if(NOT rows EQUAL 27)
+  message(FATAL_ERROR "expected 27 TSV lines, got ${rows}:\n${out}")
+endif()
+
+execute_process(COMMAND "${TOOL}" --sequence "${seq}" --kitti-correction maybe
+                RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+if(NOT rc EQUAL 2 OR NOT err MATCHES "kitti-correction")
+  message(FATAL_ERROR "--kitti-correction maybe: expected exit 2 naming the option, got ${rc}: ${err}")
+endif()
+execute_process(COMMAND "${TOOL}" --sequence "${DATA_DIR}/no_such_folder"
+                RESULT_VARIABLE rc OUTPUT_QUIET ERROR_VARIABLE err)
+if(NOT rc EQUAL 1 OR NOT err MATCHES "no_such_folder")
+  message(FATAL_ERROR "a missing folder: expected exit 1 naming it, got ${rc}: ${err}")
+endif()
