@@ -238,10 +238,11 @@ while IFS=$'\t' read -r name dir kind scene labels extra ref; do
   if [[ "$kind" == simulated ]]; then rm -rf "$dir/velodyne"; fi
 done < "$DS"
 
-# --- segmenter per-class IoU (simulated worlds, exact labels as truth) ---------
+# --- segmenter per-class IoU (simulated worlds and the real labelled scans) ---
 echo "== segmenter IoU"
 if [[ $QUICK == 1 ]]; then miou_frames=1; else miou_frames=5; fi
-SKIP_BUILD=1 BUILD_DIR="$BUILD_DIR" scripts/segmenter_miou.sh "$miou_frames" "$SEED" > "$OUT/segmenter_iou.md"
+SKIP_BUILD=1 BUILD_DIR="$BUILD_DIR" scripts/segmenter_miou.sh "$miou_frames" "$SEED" \
+  tests/data/kitti/sequences/00 tests/data/kitti/semantickitti_00_labels > "$OUT/segmenter_iou.md"
 
 # --- the page ----------------------------------------------------------------
 echo "end: $(load_now)" >> "$OUT/load.txt"
