@@ -77,13 +77,16 @@ struct OdometryConfig {
   /// solution when no direction is weak there. Algorithm 1 drops every
   /// feature whose candidates' axes disagree with its own; where few corners
   /// lie on clean edges (foliage along a rural road) that drops most corner
-  /// constraints (1951 -> 676 a frame on the simulated rural drive, seed 1)
-  /// and the rest no longer fix the direction of travel: 177 of 300 frames
-  /// degenerate against the baseline's 0. Constraints that Algorithm 1 finds
+  /// constraints (median 1951 -> 676 a frame on the rural drive of
+  /// scripts/label_quality_sweep.sh, seed 1, exact labels) and the rest no
+  /// longer fix the direction of travel: 177 of its 300 frames degenerate
+  /// against the baseline's 0. Constraints that Algorithm 1 finds
   /// inconsistent are still better than none along a direction nothing else
   /// observes. Frames that are weak either way keep Algorithm 1's solution.
-  /// Associators without an axis test solve once. Measured by
-  /// scripts/degeneracy_table.sh and scripts/label_quality_sweep.sh.
+  /// Associators without an axis test solve once. Test "Odometry: a frame
+  /// that Algorithm 1 leaves weak is solved again with the nearest
+  /// candidates"; effect in docs/label_quality.md and the degenerate counts
+  /// of scripts/reproduce.sh's report.json files.
   bool nearest_when_degenerate = true;
 };
 
