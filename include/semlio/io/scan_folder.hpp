@@ -280,18 +280,8 @@ inline ScanFolderPlan plan_scan_folder(const std::vector<std::string>& names,
 /// parse_tum_trajectory throw.
 inline std::vector<SE3d> parse_scan_folder_ground_truth(std::string_view text, const std::string& path,
                                                         std::size_t frame_count) {
-  // looks_like_tum's rule, on the text already read.
-  bool decided = false;
-  bool tum = false;
-  detail::for_each_line(text, [&](long, std::string_view s) {
-    if (decided) return;
-    const std::string_view t = detail::trim(s);
-    if (t.empty() || t.front() == '#') return;
-    decided = true;
-    tum = detail::split_ws(t).size() == 8;
-  });
   std::vector<SE3d> poses;
-  if (tum) {
+  if (looks_like_tum_text(text)) {
     for (const StampedPose& p : parse_tum_trajectory(text, path)) poses.push_back(p.pose);
   } else {
     poses = parse_kitti_poses(text, path);

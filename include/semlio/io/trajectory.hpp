@@ -152,10 +152,9 @@ inline void write_tum_trajectory(const std::string& path, const std::vector<Stam
   detail::write_file(path, format_tum_trajectory(poses));
 }
 
-/// True when the first non-blank, non-comment line has 8 fields (TUM); false
-/// for 12 (KITTI) or anything else. Throws IoError when the file is missing.
-inline bool looks_like_tum(const std::string& path) {
-  const std::string text = detail::read_file(path);
+/// True when the first non-blank, non-comment line of `text` has 8 fields
+/// (TUM); false for 12 (KITTI) or anything else.
+inline bool looks_like_tum_text(std::string_view text) {
   bool decided = false;
   bool tum = false;
   detail::for_each_line(text, [&](long, std::string_view s) {
@@ -167,6 +166,9 @@ inline bool looks_like_tum(const std::string& path) {
   });
   return tum;
 }
+
+/// looks_like_tum_text() of the file at `path`. Throws IoError when the file is missing.
+inline bool looks_like_tum(const std::string& path) { return looks_like_tum_text(detail::read_file(path)); }
 
 /// KITTI camera-0 poses P_i into lidar poses T_i = Tr^-1 * P_i * Tr, with
 /// Tr = T_cam0_velo (calib.txt `Tr`).
