@@ -6,8 +6,8 @@
 #
 #   scripts/read_speed.sh [KITTI_RAW_DRIVE]
 #
-# KITTI_RAW_DRIVE: a KITTI raw drive folder as published (e.g.
-# ../shared/data/kitti_raw/2011_09_26_drive_0009_sync, 51 scans), converted to
+# KITTI_RAW_DRIVE: a KITTI raw drive folder as published (e.g. a downloaded
+# 2011_09_26_drive_0009_sync, 51 scans), converted to
 # the KITTI layout with semlio_convert; without it, the 3-scan drive of
 # tests/data (2 tracked frames a pass: a small sample, say so when quoting).
 #

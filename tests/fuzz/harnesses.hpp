@@ -446,7 +446,7 @@ inline void check_cloud(const semlio::Scan& s, const semlio::io::PointCloud2Layo
   check(layout.points_out == s.size());
   check(layout.points_in == s.size() + stats.dropped());
   check(std::isfinite(s.stamp_s));
-  for (const double t : s.times_s) check(t >= 0.0);
+  for (const float t : s.times_s) check(t >= 0.0F);
   check(s.has_times() == !layout.time_field.empty() || s.empty());
 }
 
