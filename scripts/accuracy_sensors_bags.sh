@@ -28,6 +28,7 @@ fi
 SIM="$BUILD_DIR/examples/semlio_simulate"
 RUN="$BUILD_DIR/examples/semlio_run"
 mkdir -p "$OUT"
+rm -f "$OUT/summary.tsv"
 status=0
 rows=()
 for sensor in $SENSORS; do
@@ -50,7 +51,7 @@ for sensor in $SENSORS; do
         --preset "$PRESET" --labels "$LABELS" --map off --quiet "${extra[@]}" > "$dir/run_${PRESET}_$name.log" 2>&1; then
       echo "run failed: $dir/run_${PRESET}_$name.log"; tail -3 "$dir/run_${PRESET}_$name.log"; status=1; continue
     fi
-    row=$(/usr/bin/python3 - "$dir/run_${PRESET}_$name/report.json" "$sensor" "$input" "$bound" <<'PY'
+    row=$(/usr/bin/python3 - "$dir/run_${PRESET}_$name/report.json" "$sensor" "$input" "$bound" "$OUT/summary.tsv" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 k = r["evaluation"]["kitti"]
@@ -59,6 +60,10 @@ t = k["translation_error_pct"]
 ok = t <= float(sys.argv[4])
 print(f"{sys.argv[2]:<8} {sys.argv[3]:<17} {len(r['frames']):>6} {t:>8.3f} {k['rotation_error_deg_per_100m']:>8.4f} "
       f"<= {sys.argv[4]:<4} {'PASS' if ok else 'FAIL'}  {s.get('profile', '?')} ({s.get('detection', s.get('decided_by', ''))})")
+with open(sys.argv[5], "a") as f:  # machine-readable copy for scripts/data_sources.sh
+    f.write("\t".join([sys.argv[2], sys.argv[3], str(len(r["frames"])), f"{t:.3f}",
+                        f"{k['rotation_error_deg_per_100m']:.4f}", sys.argv[4], "PASS" if ok else "FAIL",
+                        str(s.get("profile", "?")), str(s.get("detection", s.get("decided_by", "")))]) + "\n")
 PY
 )
     rows+=("$row")

@@ -16,7 +16,8 @@
 # semlio_run --sensor FILE.yaml; otherwise through
 # scripts/balm_os0_odometry.cpp, built here against include/ (1-4 minutes),
 # the same library calls (configure_sensor) without the tool. Evaluation:
-# scripts/balm_os0_eval.py (pure Python). Exit 0 when every must-hold passes.
+# scripts/balm_os0_eval.py (pure Python; also OUT_DIR/evaluation.json). Exit 0
+# when every must-hold passes.
 set -euo pipefail
 if [[ $# -lt 1 ]]; then
   echo "usage: $0 PATH_TO_balm_os0 [OUT_DIR]" >&2
@@ -66,4 +67,5 @@ else
   echo "run: scripts/balm_os0_odometry.cpp, $(ls "$seq"/velodyne/*.bin | wc -l) keyframes in ${SECONDS} s, outputs in $out"
 fi
 # /usr/bin/python3 or any python3: the evaluation needs only the standard library.
-python3 "$root/scripts/balm_os0_eval.py" "$seq/poses.txt" "$out/poses.txt" "$out/status.txt" "$out/sensor.txt"
+python3 "$root/scripts/balm_os0_eval.py" "$seq/poses.txt" "$out/poses.txt" "$out/status.txt" "$out/sensor.txt" \
+  "$out/evaluation.json"

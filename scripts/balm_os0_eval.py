@@ -1,13 +1,16 @@
 #!/usr/bin/env python3
 """Evaluates an odometry run on the BALM OS0 keyframes (scripts/balm_os0.sh).
 
-Usage: balm_os0_eval.py REFERENCE_POSES ESTIMATED_POSES STATUS_FILE SENSOR_FACTS
+Usage: balm_os0_eval.py REFERENCE_POSES ESTIMATED_POSES STATUS_FILE SENSOR_FACTS [JSON_OUT]
 
 Prints the sensor facts, the frame statuses, the median keyframe-to-keyframe
 translation / rotation difference to the reference (relative pose errors
 between consecutive keyframes), the ATE after an SE(3) alignment (Horn's
 closed form, no scale) and one PASS/FAIL line per must-hold. Exit status 0
-when every must-hold passes, 1 otherwise. Pure Python (no numpy)."""
+when every must-hold passes, 1 otherwise. With JSON_OUT the same numbers
+are also written there as JSON (read by scripts/data_sources_page.py).
+Pure Python (no numpy)."""
+import json
 import math
 import sys
 
@@ -87,7 +90,7 @@ def horn_ate(est, ref):
 
 
 def main():
-    if len(sys.argv) != 5:
+    if len(sys.argv) not in (5, 6):
         sys.exit(__doc__)
     ref = read_poses(sys.argv[1])
     est = read_poses(sys.argv[2])
@@ -133,6 +136,13 @@ def main():
     for name, passed, detail in checks:
         print(f"{'PASS' if passed else 'FAIL'}  {name}: {detail}")
         ok = ok and passed
+    if len(sys.argv) == 6:
+        with open(sys.argv[5], "w") as f:
+            json.dump({"keyframes": len(ref), "statuses": counts, "lost": lost, "sensor": facts,
+                       "median_step_difference_m": median(dt), "median_step_difference_deg": median(dr),
+                       "max_step_difference_m": max(dt), "max_step_difference_deg": max(dr), "ate_m": ate,
+                       "checks": [{"name": n, "pass": p, "detail": d} for n, p, d in checks], "pass": ok},
+                      f, indent=1)
     return 0 if ok else 1
 
 

@@ -11,7 +11,8 @@
 #     DRIVE_DIR: a YYYY_MM_DD_drive_NNNN_sync folder as published (calibration beside it)
 #     PRESETS: "baseline full" (default)
 # Environment: BUILD_DIR (default build), SKIP_BUILD=1 (use it as built),
-# OUT (default results/kitti_raw_drive), REPORT_ONLY=1 (exit 0 whatever the verdict),
+# OUT (default results/kitti_raw_drive), LABELS (default none; geometric: the
+# GeometricSegmenter's labels, as semlio_run --labels), REPORT_ONLY=1 (exit 0 whatever the verdict),
 # IMU_SCALES="1 1e-2 1e-4 1e-6": also run --imu on --loop on (the keyframe
 # inertial graph) with each slam.imu_information_scale and print ATE and
 # end-point rotation per scale (shown, not judged; the default is 1e-6,
@@ -22,6 +23,7 @@ DRIVE=${1:?usage: scripts/kitti_raw_drive.sh DRIVE_DIR [PRESETS]}
 PRESETS=${2:-baseline full}
 BUILD_DIR=${BUILD_DIR:-build}
 OUT=${OUT:-results/kitti_raw_drive}
+LABELS=${LABELS:-none}
 if [ -z "${SKIP_BUILD:-}" ]; then
   scripts/install_deps.sh
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
@@ -29,6 +31,7 @@ if [ -z "${SKIP_BUILD:-}" ]; then
 fi
 RUN="$BUILD_DIR/examples/semlio_run"
 mkdir -p "$OUT"
+rm -f "$OUT/summary.tsv"
 fail=0
 printf '%-9s %-10s %8s %9s %9s %8s %8s %6s %s\n' preset imu frames path_m oxts_m ate_m end_deg init verdict
 for preset in $PRESETS; do
@@ -36,9 +39,10 @@ for preset in $PRESETS; do
     dir="$OUT/${preset}_imu_${imu}"
     extra=()
     if [ "$imu" = on ]; then extra=(--imu on --deskew on); fi
-    "$RUN" --input "$DRIVE" --out "$dir" --overwrite --preset "$preset" --labels none --map off --quiet \
+    "$RUN" --input "$DRIVE" --out "$dir" --overwrite --preset "$preset" --labels "$LABELS" --map off --quiet \
       "${extra[@]}" > "$dir.log" 2>&1 || { echo "run failed: $dir.log"; tail -5 "$dir.log"; fail=1; continue; }
-    /usr/bin/python3 - "$dir/report.json" "$preset" "$imu" "$OUT/${preset}_imu_none/report.json" <<'PY' || fail=1
+    /usr/bin/python3 - "$dir/report.json" "$preset" "$imu" "$OUT/${preset}_imu_none/report.json" "$OUT/summary.tsv" \
+      <<'PY' || fail=1
 import json, sys
 r = json.load(open(sys.argv[1]))
 e = r["evaluation"]
@@ -62,6 +66,10 @@ if sys.argv[3] == "on":
             f"{'no worse' if ok_ate else 'WORSE'}, end rotation {'no worse' if ok_end else 'WORSE'}")
 print(f"{sys.argv[2]:<9} {sys.argv[3]:<10} {r['frames_done']:>8} {path:>9.2f} {ref:>9.2f} {ate:>8.3f} {end_deg:>8.3f} "
       f"{init:>6} {'PASS' if ok else 'FAIL'} ({why})")
+with open(sys.argv[5], "a") as f:  # machine-readable copy for scripts/data_sources.sh
+    f.write("\t".join([sys.argv[2], sys.argv[3], str(r["frames_done"]), f"{path:.2f}", f"{ref:.2f}", f"{ate:.3f}",
+                        f"{end_deg:.3f}", init, str(r["imu"]["imu_deskewed_frames"]) if sys.argv[3] == "on" else "-",
+                        "PASS" if ok else "FAIL", why]) + "\n")
 sys.exit(0 if ok else 1)
 PY
   done
@@ -73,7 +81,7 @@ if [ -n "${IMU_SCALES:-}" ]; then
       dir="$OUT/${preset}_graph_imu_${scale}"
       mkdir -p "$dir.cfg"
       echo "slam: {imu_information_scale: $scale}" > "$dir.cfg/config.yaml"
-      "$RUN" --input "$DRIVE" --out "$dir" --overwrite --preset "$preset" --labels none --map off --quiet \
+      "$RUN" --input "$DRIVE" --out "$dir" --overwrite --preset "$preset" --labels "$LABELS" --map off --quiet \
         --imu on --deskew on --loop on --config "$dir.cfg/config.yaml" > "$dir.log" 2>&1 ||
         { echo "run failed: $dir.log"; tail -5 "$dir.log"; fail=1; continue; }
       /usr/bin/python3 - "$dir/report.json" "$preset" "$scale" <<'PY'
