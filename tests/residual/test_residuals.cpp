@@ -294,6 +294,21 @@ TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label rel
   WeightedPlane paper_k = paper;
   paper_k.set_label_reliability(0.0);
   CHECK(weighted_distance(paper_k) == Approx(0.25 * d));
+  // Weights switched off (the odometry's baseline-like re-solve of a weak
+  // frame): w = 1 in every mode until switched back on.
+  for (WeightedPlane w : {paper, corrected}) {
+    w.set_label_reliability(1.0);
+    REQUIRE(w.weights_enabled());
+    const double on_distance = weighted_distance(w);
+    w.set_weights_enabled(false);
+    CHECK_FALSE(w.weights_enabled());
+    CHECK(weighted_distance(w) == d);
+    const auto term = w.evaluate(f, plane, SE3d());
+    CHECK(term.J_r_xi == semlio::PointToPlane{}.evaluate(f, plane, SE3d()).J_r_xi);
+    w.set_weights_enabled(true);
+    CHECK(weighted_distance(w) == on_distance);
+    CHECK(on_distance == Approx(0.25 * d));
+  }
 }
 
 TEST_CASE("Robust kernels give the IRLS weight of the current residual", "[residual]") {

@@ -153,6 +153,14 @@ class ScanToMapProblem {
     return widened;
   }
 
+  /// Switches the residuals' semantic weights off (every weight 1) or back
+  /// on (SemanticWeighted::set_weights_enabled); no effect on residuals
+  /// without them.
+  void set_semantic_weights(bool on) {
+    if constexpr (requires(CornerResidual& r) { r.set_weights_enabled(on); }) residuals_.corner.set_weights_enabled(on);
+    if constexpr (requires(SurfaceResidual& r) { r.set_weights_enabled(on); }) residuals_.surface.set_weights_enabled(on);
+  }
+
   /// True when the associator has an axis test it can switch off
   /// (NormalConsistency::set_axis_test); NearestK has none.
   static constexpr bool kHasAxisTest = requires(A& a) { a.set_axis_test(true); };

@@ -79,8 +79,16 @@ class SemanticWeighted {
   /// The settings.
   [[nodiscard]] const SemanticWeightConfig& config() const noexcept { return config_; }
 
+  /// Switches the weight off (w = 1, whatever the mode) or back on; on
+  /// until called. The odometry solves a frame that stays weak with the
+  /// weights off (OdometryConfig::nearest_when_degenerate).
+  void set_weights_enabled(bool on) noexcept { enabled_ = on; }
+  /// False while set_weights_enabled(false) holds.
+  [[nodiscard]] bool weights_enabled() const noexcept { return enabled_; }
+
   /// The weight of a feature whose matches agree with its label at rate a.
   [[nodiscard]] double weight(double a) const noexcept {
+    if (!enabled_) return 1.0;
     switch (config_.mode) {
       case SemanticWeightMode::kPaper:
         return a;
@@ -136,6 +144,7 @@ class SemanticWeighted {
   R inner_;
   SemanticWeightConfig config_;
   double reliability_ = 1.0;  // kappa; 1 = trust the labels (the paper)
+  bool enabled_ = true;
 };
 
 static_assert(Residual<SemanticWeighted<PointToPlane>>);
