@@ -232,8 +232,8 @@ inline const std::map<std::string, Setters>& sections() {
             [](Targets& t, const YAML::Node& n) { read_pos(t.s.odometry.max_correction_m, n, 1e4); }},
            {"max_correction_rad",
             [](Targets& t, const YAML::Node& n) { read_pos(t.s.odometry.max_correction_rad, n, kPi); }},
-           {"nearest_when_degenerate",
-            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.nearest_when_degenerate, n); }},
+           {"baseline_when_degenerate",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.odometry.baseline_when_degenerate, n); }},
        }},
       {"preprocess",
        {

@@ -682,11 +682,11 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
   std::vector<std::size_t> status_counts(8, 0);
   std::size_t missing = 0;
   std::size_t unreadable = 0;
-  std::size_t nearest_fallbacks = 0;
+  std::size_t baseline_fallbacks = 0;
   semlio::io::ReadStats dropped;
   for (std::size_t i = 0; i < n; ++i) {
     const auto& r = result.reports[i];
-    nearest_fallbacks += r.nearest_fallback ? 1U : 0U;
+    baseline_fallbacks += r.baseline_fallback ? 1U : 0U;
     if (r.status != semlio::OdometryStatus::kSkipped) totals.push_back(result.back_end[i].total_ms);
     const InputFrame& in = result.inputs[i];
     if (in.missing) ++missing;
@@ -738,7 +738,7 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
     }
     j.field("missing", missing);
     j.end_object();
-    j.field("nearest_fallback_frames", nearest_fallbacks);
+    j.field("baseline_fallback_frames", baseline_fallbacks);
     j.key("association_rank_histogram").begin_array();
     for (std::size_t r = 1; r < result.ranks.size(); ++r) j.value(static_cast<unsigned long long>(result.ranks[r]));
     j.end_array();
@@ -841,7 +841,7 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
       if (std::isfinite(r.corner_label_kappa)) j.field("corner_label_kappa", r.corner_label_kappa);
       if (std::isfinite(r.surface_label_kappa)) j.field("surface_label_kappa", r.surface_label_kappa);
       j.field("iterations", r.solve.iterations).field("solver_status", semlio::to_string(r.solve.status));
-      j.field("degenerate_directions", r.solve.degenerate_directions).field("nearest_fallback", r.nearest_fallback);
+      j.field("degenerate_directions", r.solve.degenerate_directions).field("baseline_fallback", r.baseline_fallback);
       j.array_field("eigenvalues", std::vector<double>(r.solve.eigenvalues.data(), r.solve.eigenvalues.data() + 6));
       // Per-axis observability: the normalised eigenvalues the degeneracy
       // flag tests (solve/gauss_newton.hpp) and the weakest direction
@@ -882,7 +882,7 @@ inline void write_outputs(const RunContext& ctx, const RunResult& result, const 
     if (status_counts[s] > 0) std::printf(" %s=%zu", semlio::to_string(static_cast<semlio::OdometryStatus>(s)), status_counts[s]);
   }
   if (missing > 0) std::printf(" missing=%zu", missing);
-  if (nearest_fallbacks > 0) std::printf("  (solved again with the nearest candidates: %zu)", nearest_fallbacks);
+  if (baseline_fallbacks > 0) std::printf("  (solved again as baseline: %zu)", baseline_fallbacks);
   std::printf("\n");
   if (missing > 0) {
     std::printf("  missing frames     ");

@@ -57,7 +57,7 @@ std::map<std::string, Getter> getters() {
   SEMLIO_KEY("odometry.min_features", s.odometry.min_features);
   SEMLIO_KEY("odometry.max_correction_m", s.odometry.max_correction_m);
   SEMLIO_KEY("odometry.max_correction_rad", s.odometry.max_correction_rad);
-  SEMLIO_KEY("odometry.nearest_when_degenerate", s.odometry.nearest_when_degenerate);
+  SEMLIO_KEY("odometry.baseline_when_degenerate", s.odometry.baseline_when_degenerate);
   SEMLIO_KEY("preprocess.min_range_m", s.odometry.preprocess.min_range_m);
   SEMLIO_KEY("preprocess.max_range_m", s.odometry.preprocess.max_range_m);
   SEMLIO_KEY("preprocess.crop_ego_box", s.odometry.preprocess.crop_ego_box);

@@ -269,12 +269,12 @@ TEST_CASE("Odometry: a frame that Algorithm 1 leaves weak is solved again with t
   // light traffic, exact labels), as semlio_kitti reads it from KITTI .bin
   // files (no rings or times): its corners lie mostly in foliage, so
   // Algorithm 1 keeps about a third of them and the direction of travel
-  // becomes weak (OdometryConfig::nearest_when_degenerate).
+  // becomes weak (OdometryConfig::baseline_when_degenerate).
   constexpr std::size_t kFrames = 16;
   const std::vector<Scan> scans = simulated_kitti_scans(sim::WorldKind::kRural, kFrames);
   const auto run = [&](bool fallback, bool full) {
     PipelineSettings settings;
-    settings.odometry.nearest_when_degenerate = fallback;
+    settings.odometry.baseline_when_degenerate = fallback;
     std::vector<FrameReport> reports;
     const auto each = [&](auto odo) {
       for (const Scan& scan : scans) {
@@ -295,7 +295,7 @@ TEST_CASE("Odometry: a frame that Algorithm 1 leaves weak is solved again with t
     return n;
   };
   const auto degenerate = [](const FrameReport& r) { return r.status == OdometryStatus::kDegenerate; };
-  const auto fell_back = [](const FrameReport& r) { return r.nearest_fallback; };
+  const auto fell_back = [](const FrameReport& r) { return r.baseline_fallback; };
 
   const std::vector<FrameReport> off = run(false, true);
   const std::vector<FrameReport> on = run(true, true);
@@ -309,7 +309,7 @@ TEST_CASE("Odometry: a frame that Algorithm 1 leaves weak is solved again with t
   for (std::size_t i = 0; i < kFrames; ++i) {
     INFO("frame " << i);
     CHECK(on[i].T_map_lidar.matrix().allFinite());
-    if (!on[i].nearest_fallback) continue;
+    if (!on[i].baseline_fallback) continue;
     // The kept solution is the nearest-candidate solve's: not weak, and
     // matched with the nearest candidates (far more corners than
     // Algorithm 1 keeps on the same frame).
@@ -319,7 +319,7 @@ TEST_CASE("Odometry: a frame that Algorithm 1 leaves weak is solved again with t
   }
   // The first frame after the start solves with the nearest candidates
   // anyway (no motion estimate): no fallback there.
-  CHECK_FALSE(on[1].nearest_fallback);
+  CHECK_FALSE(on[1].baseline_fallback);
   // NearestK has no axis test: the setting changes nothing.
   const std::vector<FrameReport> baseline_off = run(false, false);
   const std::vector<FrameReport> baseline_on = run(true, false);

@@ -192,11 +192,11 @@ TEST_CASE("the full preset tracks hand-held turns its prediction misses by more 
   const semlio::SE3d T1(semlio::SO3d::exp(Eigen::Vector3d(0.0, 0.05, 0.4)), Eigen::Vector3d(0.3, -0.1, 0.05));
   const semlio::SE3d T2(semlio::SO3d::exp(Eigen::Vector3d(0.0, 0.0, -0.05)), Eigen::Vector3d(0.5, 0.1, 0.0));
   const semlio::SensorProfile os0 = semlio::sensor_profile("os0-64");
-  const auto run = [&](bool coarse_first, bool nearest_when_degenerate) {
+  const auto run = [&](bool coarse_first, bool baseline_when_degenerate) {
     semlio::PipelineSettings settings = semlio::settings_for_sensor(os0, semlio::hand_held_motion());
     REQUIRE(settings.odometry.coarse_solve_first);
     settings.odometry.coarse_solve_first = coarse_first;
-    settings.odometry.nearest_when_degenerate = nearest_when_degenerate;
+    settings.odometry.baseline_when_degenerate = baseline_when_degenerate;
     auto odo = semlio::make_full_odometry(semlio::NoLabels{}, settings);
     const semlio::SE3d poses[] = {semlio::SE3d(), T1, T2};
     semlio::FrameReport last;
@@ -210,7 +210,7 @@ TEST_CASE("the full preset tracks hand-held turns its prediction misses by more 
   CHECK(run(true, false) < 0.2);
   CHECK(run(false, false) > 1.0);  // without the coarse solve the turn back is missed
   // Algorithm 1's solve of the missed turn is weak, so the nearest-candidate
-  // solve from there (OdometryConfig::nearest_when_degenerate) runs and finds
+  // solve from there (OdometryConfig::baseline_when_degenerate) runs and finds
   // the turn too.
   CHECK(run(false, true) < 0.2);
 }

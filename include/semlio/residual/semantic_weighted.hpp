@@ -81,7 +81,7 @@ class SemanticWeighted {
 
   /// Switches the weight off (w = 1, whatever the mode) or back on; on
   /// until called. The odometry solves a frame that stays weak with the
-  /// weights off (OdometryConfig::nearest_when_degenerate).
+  /// weights off (OdometryConfig::baseline_when_degenerate).
   void set_weights_enabled(bool on) noexcept { enabled_ = on; }
   /// False while set_weights_enabled(false) holds.
   [[nodiscard]] bool weights_enabled() const noexcept { return enabled_; }
