@@ -263,6 +263,93 @@ TEST_CASE("GeometricSegmenter finds a pole standing in a bush", "[segment]") {
   CHECK(bush_veg > 9 * bush / 10);
 }
 
+namespace {
+// Flat ground sampled on a 0.2 m grid from 3.7 m out (an HDL-64E 1.73 m up
+// meets the ground no nearer) to `reach_m` in x and y (y only up to
+// `side_m` off the street's edges); points with y below `kerb_right_y` or
+// above `kerb_left_y` are raised by `kerb_m` (sidewalks).
+void add_ground(semlio::Scan& scan, float reach_m, float kerb_right_y = -1e9F, float kerb_left_y = 1e9F,
+                float kerb_m = 0.0F, float side_m = 1e9F) {
+  const float ground_z = -static_cast<float>(semlio_test::kSceneSensorHeight);
+  for (float x = -reach_m; x <= reach_m; x += 0.2F) {
+    for (float y = -reach_m; y <= reach_m; y += 0.2F) {
+      if (y < kerb_right_y - side_m || y > kerb_left_y + side_m) continue;
+      if (std::hypot(x, y) < 3.7F) continue;
+      const bool raised = y < kerb_right_y || y > kerb_left_y;
+      scan.points.emplace_back(x, y, ground_z + (raised ? kerb_m : 0.0F));
+      scan.labels.push_back(raised ? Class::kSidewalk : Class::kRoad);
+    }
+  }
+}
+}  // namespace
+
+namespace {
+// Flat ground and, 10 m ahead, a 0.08 m sign post up to 2.2 m with (when
+// `panel`) a 0.6 m x 0.6 m panel facing the sensor on top (2.2-2.8 m), or
+// (when `crown`) a rough 1.2 m crown of a young tree instead (points spread
+// over 0.6 m in depth). Labels: kPole post, kTrafficSign panel, kVegetation crown.
+semlio::Scan sign_scene(bool panel, bool crown) {
+  semlio::Scan scan;
+  add_ground(scan, 14.0F);
+  const float ground_z = -static_cast<float>(semlio_test::kSceneSensorHeight);
+  for (float h = 0.1F; h <= 2.2F; h += 0.05F) {
+    for (const float y : {-0.04F, 0.0F, 0.04F}) {
+      scan.points.emplace_back(10.0F, y, ground_z + h);
+      scan.labels.push_back(Class::kPole);
+    }
+  }
+  std::uint32_t state = 777U;
+  for (float y = -0.3F; y <= 0.3F; y += 0.03F) {
+    for (float h = 2.25F; h <= 2.8F; h += 0.05F) {
+      if (panel) {
+        scan.points.emplace_back(9.98F, y, ground_z + h);
+        scan.labels.push_back(Class::kTrafficSign);
+      }
+      if (crown) {
+        state = state * 1664525U + 1013904223U;  // LCG: a fixed pseudo-random depth
+        const float depth = 0.6F * static_cast<float>(state >> 8) / 16777216.0F - 0.3F;
+        scan.points.emplace_back(10.0F + depth, 2.0F * y, ground_z + h);
+        scan.labels.push_back(Class::kVegetation);
+      }
+    }
+  }
+  return scan;
+}
+}  // namespace
+
+TEST_CASE("GeometricSegmenter finds a sign panel on top of a post", "[segment]") {
+  const semlio::GeometricSegmenter seg;
+  SECTION("post with a panel: pole below a traffic sign") {
+    semlio::Scan scan = sign_scene(true, false);
+    const std::vector<Class> truth = scan.labels;
+    seg.segment(scan);
+    std::size_t panel = 0, panel_ok = 0, post = 0, post_ok = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      if (truth[i] == Class::kTrafficSign) {
+        ++panel;
+        panel_ok += scan.labels[i] == Class::kTrafficSign ? 1U : 0U;
+      } else if (truth[i] == Class::kPole && scan.points[i].z() > -1.2F) {  // above the ground clutter
+        ++post;
+        post_ok += scan.labels[i] == Class::kPole ? 1U : 0U;
+      }
+    }
+    INFO(panel_ok << " / " << panel << " panel, " << post_ok << " / " << post << " post");
+    REQUIRE(panel > 100);
+    CHECK(panel_ok > 9 * panel / 10);
+    CHECK(post_ok > 8 * post / 10);
+  }
+  SECTION("the bare post stays a pole; a rough crown on a thin trunk is no sign") {
+    for (const bool crown : {false, true}) {
+      semlio::Scan scan = sign_scene(false, crown);
+      seg.segment(scan);
+      std::size_t signs = 0;
+      for (const Class c : scan.labels) signs += c == Class::kTrafficSign ? 1U : 0U;
+      INFO("crown " << crown);
+      CHECK(signs == 0);
+    }
+  }
+}
+
 TEST_CASE("GeometricSegmenter rejects bad configs", "[segment]") {
   CHECK_THROWS_AS(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.cell_size_m = 0.0}), semlio::ConfigError);
   CHECK_THROWS_AS(semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.sectors = 0}), semlio::ConfigError);

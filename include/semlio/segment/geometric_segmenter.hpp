@@ -39,6 +39,12 @@
 ///      group of ground-standing cells that rises 1 m above the rest, e.g. a
 ///      pole in a bush: trunk when a crown surrounds it, pole when at most a
 ///      sign or an arm is beside it); the rest (canopy) -> kVegetation.
+///    Then traffic signs: a free-standing column (pole, trunk or a wall
+///    fragment at most a panel wide) whose visible width across the line of
+///    sight jumps from a post's (<= 0.25 m, seen over most of its height) to
+///    a flat panel's (0.3-1.5 m) at 1.2 m or higher, up to its top (<= 4.5 m),
+///    is a pole below a kTrafficSign. Geometry only: the retro-reflective
+///    face is bright, but signs seen from behind or the side are not.
 ///    Heights are judged knowing the field of view: a cell whose top reaches
 ///    the highest beam (+2 deg) counts as taller than any threshold (a wall
 ///    10 m away looks only ~2 m tall to a 64-beam KITTI lidar).
@@ -134,6 +140,24 @@ struct GeometricSegmenterConfig {
   double wall_max_roughness_m = 0.15;
   /// Fewest points (cell and neighbours) to judge roughness; fewer are taken as planar.
   int roughness_min_points = 8;
+  // Traffic signs: a free-standing column (pole or trunk with no canopy)
+  // whose top is a flat panel much wider than the post under it.
+  double sign_slice_m = 0.2;         ///< height slices in which a column's visible width is measured [m]: two or more beams on a sign 10-20 m away
+  double sign_min_base_m = 1.2;      ///< a sign panel starts at least this high [m]: above bushes and parked-car roofs; panels over footways hang at 2-2.5 m, over verges from ~1.5 m
+  double sign_max_top_m = 4.5;       ///< ... and ends at most this high [m]: panels are mounted at 1.8-3.5 m (issue #38) plus their own size; street-light heads are higher
+  double sign_min_width_m = 0.3;     ///< visible panel width at least [m]: the smallest panels are 0.4 m (0.3 when seen 40 deg off-axis)
+  double sign_max_width_m = 1.5;     ///< ... and at most [m]: single-post panels are up to ~1.2 m
+  double sign_max_panel_height_m = 1.6;  ///< panel (or stack of panels) at most this tall [m]
+  double sign_max_post_width_m = 0.25;   ///< the post under a panel is at most this wide (visible) [m]: sign posts are 0.05-0.2 m
+  double sign_post_min_height_m = 0.6;   ///< ... measured above this height [m]: grass, litter and kerb stones at its foot are lower
+  /// The post is seen in at least this share of the height slices between
+  /// sign_post_min_height_m and the panel: a post is continuous, whereas the
+  /// top of a wall seen over a bush or a car shows only in patches.
+  double sign_min_post_cover = 0.6;
+  /// The panel's points spread at most this much across their best-fitting
+  /// vertical plane (standard deviation) [m]: a panel is flat (range noise
+  /// ~0.02 m), the crown of a young tree on a thin trunk is rough (0.1-0.3 m).
+  double sign_max_roughness_m = 0.06;
   double top_beam_elevation_rad = 0.0349;  ///< elevation of the highest beam (HDL-64E: +2 deg) [rad]
   double clip_margin_m = 0.15;       ///< a cell reaching within this of the highest visible height is cut off by the field of view [m]
 };
@@ -182,6 +206,7 @@ class GeometricSegmenter {
     build_grid(scan);
     grid_.connect();
     for (const detail::GridComponent& comp : grid_.components()) classify(comp);
+    find_signs(scan);
     label_objects(scan);
   }
 
@@ -652,6 +677,137 @@ class GeometricSegmenter {
     }
   }
 
+  // Traffic signs: among the free-standing columns (8-connected cells
+  // labelled pole or trunk with no canopy above), those whose visible width
+  // across the line of sight jumps from a post's (<= sign_max_post_width_m)
+  // to a panel's (sign_min_width_m..sign_max_width_m) at sign_min_base_m or
+  // higher and stays so up to the column's top, with the panel's points on
+  // a vertical plane, become a pole (post) below a traffic sign (panel). A
+  // sign's wide panel is also what makes a sign post look like a trunk.
+  void find_signs(const Scan& scan) const {
+    const Config& c = config_;
+    const auto f = [](double v) { return static_cast<float>(v); };
+    const auto is_column = [&](std::uint32_t cell) {
+      const detail::GridCell& g = grid_.cell(cell);
+      return g.count > 0 &&
+             (g.label == id(Class::kPole) || g.label == id(Class::kTrunk) || g.label == id(Class::kBuilding)) &&
+             (g.upper_label == g.label || g.split_m == std::numeric_limits<float>::infinity());
+    };
+    for (const std::uint32_t cell : grid_.touched()) grid_.cell(cell).mark = -1;
+    col_dir_.clear();
+    std::int32_t columns = 0;
+    constexpr std::int32_t kTooWide = std::numeric_limits<std::int32_t>::max();
+    for (const std::uint32_t cell : grid_.touched()) {
+      if (grid_.cell(cell).mark != -1 || !is_column(cell)) continue;
+      grow(cell, columns, is_column);
+      // A sign's panel spans up to sign_max_width_m and its cells; wider
+      // groups (walls, a pole against a wall) are no single sign.
+      if (stack_size_m() > f(c.sign_max_width_m) + grid_.cell_size_m()) {
+        for (const std::uint32_t o : stack_) grid_.cell(o).mark = kTooWide;
+        continue;
+      }
+      ++columns;
+      const Eigen::Vector2f p = grid_.centre(cell);
+      col_dir_.push_back(p.norm() > 1e-3F ? Eigen::Vector2f(p.normalized()) : Eigen::Vector2f(1.0F, 0.0F));
+    }
+    if (columns == 0) return;
+    const float slice = f(c.sign_slice_m);
+    const int slices = std::max(1, static_cast<int>(std::ceil(f(c.sign_max_top_m) / slice)));
+    const auto k_cols = static_cast<std::size_t>(columns);
+    const auto k_slices = static_cast<std::size_t>(slices);
+    col_t_min_.assign(k_cols * k_slices, std::numeric_limits<float>::infinity());
+    col_t_max_.assign(k_cols * k_slices, -std::numeric_limits<float>::infinity());
+    col_top_m_.assign(k_cols, -std::numeric_limits<float>::infinity());
+    col_base_m_.assign(k_cols, std::numeric_limits<float>::infinity());
+    // Pass 1: visible width per column and height slice.
+    const auto column_of = [&](std::size_t i) -> std::int32_t {
+      if (cell_of_[i] < 0 || kind_[i] != detail::GroundKind::kObstacle) return -1;
+      const auto cell = static_cast<std::uint32_t>(cell_of_[i]);
+      return is_column(cell) && grid_.cell(cell).mark != kTooWide ? grid_.cell(cell).mark : -1;
+    };
+    for (std::size_t i = 0; i < scan.points.size(); ++i) {
+      const std::int32_t k = column_of(i);
+      if (k < 0) continue;
+      const auto ks = static_cast<std::size_t>(k);
+      const float h = height_m_[i];
+      col_top_m_[ks] = std::max(col_top_m_[ks], h);
+      col_base_m_[ks] = std::min(col_base_m_[ks], h);
+      if (h >= f(c.sign_max_top_m)) continue;
+      const auto s = static_cast<std::size_t>(std::clamp(static_cast<int>(h / slice), 0, slices - 1));
+      const Eigen::Vector3f& q = scan.points[i];
+      const float t = col_dir_[ks].x() * q.y() - col_dir_[ks].y() * q.x();
+      col_t_min_[ks * k_slices + s] = std::min(col_t_min_[ks * k_slices + s], t);
+      col_t_max_[ks * k_slices + s] = std::max(col_t_max_[ks * k_slices + s], t);
+    }
+    // Panel base per column (infinity: no sign).
+    col_panel_m_.assign(k_cols, std::numeric_limits<float>::infinity());
+    for (std::size_t k = 0; k < k_cols; ++k) {
+      if (col_top_m_[k] > f(c.sign_max_top_m) || col_base_m_[k] > f(c.stem_max_base_m)) continue;  // too tall, or not standing
+      float post = 0.0F;
+      int post_slices = 0;   // slices between sign_post_min_height_m and the panel ...
+      int post_seen = 0;     // ... and those with points
+      float base = std::numeric_limits<float>::infinity();
+      bool ok = true;
+      for (std::size_t s = 0; s < k_slices; ++s) {
+        const float lo = col_t_min_[k * k_slices + s];
+        const float hi = col_t_max_[k * k_slices + s];
+        const float h = static_cast<float>(s) * slice;
+        if (base == std::numeric_limits<float>::infinity() && h >= f(c.sign_post_min_height_m)) ++post_slices;
+        if (!(hi >= lo)) continue;  // no points at this height (occluded)
+        const float w = hi - lo;
+        if (base == std::numeric_limits<float>::infinity()) {
+          if (h >= f(c.sign_min_base_m) && w >= f(c.sign_min_width_m)) {
+            base = h;
+          } else if (h >= f(c.sign_post_min_height_m)) {
+            post = std::max(post, w);
+            ++post_seen;
+          }
+        }
+        if (base != std::numeric_limits<float>::infinity() && w > f(c.sign_max_width_m)) ok = false;
+      }
+      // The panel's own first slice was counted as a post slice.
+      const bool post_visible = post_seen > 0 && static_cast<double>(post_seen) >= c.sign_min_post_cover * (post_slices - 1);
+      if (ok && post_visible && post <= f(c.sign_max_post_width_m) && base < col_top_m_[k] &&
+          col_top_m_[k] - base <= f(c.sign_max_panel_height_m)) {
+        col_panel_m_[k] = base;
+      }
+    }
+    // Pass 2: the panel's flatness (horizontal spread across its best line).
+    col_moments_.assign(k_cols * 6, 0.0);
+    for (std::size_t i = 0; i < scan.points.size(); ++i) {
+      const std::int32_t k = column_of(i);
+      if (k < 0 || height_m_[i] < col_panel_m_[static_cast<std::size_t>(k)]) continue;
+      double* m = &col_moments_[static_cast<std::size_t>(k) * 6];
+      const auto x = static_cast<double>(scan.points[i].x());
+      const auto y = static_cast<double>(scan.points[i].y());
+      m[0] += 1.0;
+      m[1] += x;
+      m[2] += y;
+      m[3] += x * x;
+      m[4] += y * y;
+      m[5] += x * y;
+    }
+    for (const std::uint32_t cell : grid_.touched()) {
+      detail::GridCell& g = grid_.cell(cell);
+      if (g.mark < 0 || g.mark == kTooWide) continue;  // only columns were marked above
+      const auto k = static_cast<std::size_t>(g.mark);
+      if (col_panel_m_[k] == std::numeric_limits<float>::infinity()) continue;
+      const double* m = &col_moments_[k * 6];
+      if (m[0] < 3.0) continue;
+      const double mx = m[1] / m[0];
+      const double my = m[2] / m[0];
+      const double cxx = m[3] / m[0] - mx * mx;
+      const double cyy = m[4] / m[0] - my * my;
+      const double cxy = m[5] / m[0] - mx * my;
+      const double half_trace = 0.5 * (cxx + cyy);
+      const double minor = half_trace - std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
+      if (std::sqrt(std::max(0.0, minor)) > c.sign_max_roughness_m) continue;
+      g.label = id(Class::kPole);
+      g.upper_label = id(Class::kTrafficSign);
+      g.split_m = col_panel_m_[k];
+    }
+  }
+
   void label_objects(Scan& scan) const {
     for (std::size_t i = 0; i < scan.points.size(); ++i) {
       if (cell_of_[i] < 0) continue;
@@ -671,6 +827,15 @@ class GeometricSegmenter {
   mutable std::vector<std::int32_t> cell_of_;
   mutable std::vector<std::uint32_t> stack_;
   mutable std::vector<std::uint32_t> group_;
+  // find_signs: per column, its reference direction, visible width per height
+  // slice, height range, panel base and panel point moments.
+  mutable std::vector<Eigen::Vector2f> col_dir_;
+  mutable std::vector<float> col_t_min_;
+  mutable std::vector<float> col_t_max_;
+  mutable std::vector<float> col_top_m_;
+  mutable std::vector<float> col_base_m_;
+  mutable std::vector<float> col_panel_m_;
+  mutable std::vector<double> col_moments_;
 };
 
 static_assert(Segmenter<GeometricSegmenter>);
