@@ -283,6 +283,37 @@ void add_ground(semlio::Scan& scan, float reach_m, float kerb_right_y = -1e9F, f
 }
 }  // namespace
 
+TEST_CASE("GeometricSegmenter finds the sidewalk beside a vehicle driving close to the kerb", "[segment]") {
+  // A 7 m wide street with 0.15 m kerbs (kerbs are 0.10-0.20 m): the vehicle
+  // drives 2.8 m from the right kerb, so its lowest ring (3.7 m out) meets
+  // only sidewalk to its right. The road ahead and behind sets the road
+  // height; an all-round ground fit would sit between road and sidewalk and
+  // shrink the step below curb_min_m.
+  // Sidewalks 4 m wide; counted: the points beside the vehicle (|x| <= 4 m)
+  // up to 2 m behind the kerbs, and the road between them.
+  semlio::Scan scan;
+  add_ground(scan, 14.0F, -2.8F, 4.2F, 0.15F, 4.0F);
+  const std::vector<Class> truth = scan.labels;
+  semlio::GeometricSegmenter().segment(scan);
+  std::size_t sidewalk = 0, sidewalk_ok = 0, road = 0, road_ok = 0;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    const Eigen::Vector3f& q = scan.points[i];
+    if (std::fabs(q.x()) > 4.0F || q.y() < -4.8F || q.y() > 6.2F) continue;
+    if (truth[i] == Class::kSidewalk) {
+      ++sidewalk;
+      sidewalk_ok += scan.labels[i] == Class::kSidewalk ? 1U : 0U;
+    } else {
+      ++road;
+      road_ok += scan.labels[i] == Class::kRoad ? 1U : 0U;
+    }
+  }
+  INFO(sidewalk_ok << " / " << sidewalk << " sidewalk, " << road_ok << " / " << road << " road");
+  REQUIRE(sidewalk > 300);
+  REQUIRE(road > 300);
+  CHECK(sidewalk_ok > 9 * sidewalk / 10);
+  CHECK(road_ok > 9 * road / 10);
+}
+
 namespace {
 // Flat ground and, 10 m ahead, a 0.08 m sign post up to 2.2 m with (when
 // `panel`) a 0.6 m x 0.6 m panel facing the sensor on top (2.2-2.8 m), or

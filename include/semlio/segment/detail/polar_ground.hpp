@@ -127,19 +127,35 @@ class PolarGround {
 
  private:
   // Fits z = c0 + cx x + cy y to the lowest points of the flat bins 3-12 m
-  // away (least squares, then again without bins more than 0.15 m off): the
-  // road under and around the vehicle, including the sensor's roll and pitch
-  // relative to it. Falls back to z = -sensor_height with too few bins.
+  // away: the road under and around the vehicle, including the sensor's roll
+  // and pitch relative to it. Pass 0 uses only the bins ahead of and behind
+  // the vehicle in its own lane (centres within kLaneHalfWidth of its heading
+  // axis), within 0.5 m of the sensor-height plane: the vehicle drives along
+  // its road, so these are the road, whereas the bins beside it may be a
+  // sidewalk a kerb higher (a car driving ~3 m from the kerb sees only
+  // sidewalk to its side, since an HDL-64E's lowest ring meets the ground
+  // 3.7 m out; an all-round fit sits between road and sidewalk and shrinks
+  // the kerb step below curb_min_m, and raised verges tilt it the same way).
+  // Pass 1 refits on all bins from 0.15 m below that plane (cross fall to
+  // the gutters, dips) to curb_min_m above it (higher is past a kerb). With
+  // fewer than 20 bins in the lane (a car just ahead and behind), pass 0
+  // takes all bins and pass 1 keeps bins within 0.15 m either way, as an
+  // all-round fit. Falls back to z = -sensor_height with too few bins.
   void fit_local_plane(int sectors, int bins, const PolarGroundParams& p) {
     sectors_ = sectors;
     plane_ = Eigen::Vector3f(-p.sensor_height_m, 0.0F, 0.0F);
     const float inv = 1.0F / p.bins_per_sqrt_m;
     const int b0 = static_cast<int>(std::sqrt(3.0F) * p.bins_per_sqrt_m);
     const int b1 = std::min(bins - 1, static_cast<int>(std::sqrt(12.0F) * p.bins_per_sqrt_m));
+    // Half the width of a lane (2.75-3.75 m) [m]: the vehicle's own lane,
+    // even when the vehicle is 0.3 m off its centre line.
+    constexpr float kLaneHalfWidth = 1.5F;
+    bool lane_fit = true;  // false: too few bins in the lane, fit all round
     for (int pass = 0; pass < 2; ++pass) {
       Eigen::Matrix3f A = Eigen::Matrix3f::Zero();
       Eigen::Vector3f rhs = Eigen::Vector3f::Zero();
       int used = 0;
+      const bool lane_only = pass == 0 && lane_fit;
       for (int s = 0; s < sectors; ++s) {
         const float az = (static_cast<float>(s) + 0.5F) * 2.0F * std::numbers::pi_v<float> / static_cast<float>(sectors) -
                          std::numbers::pi_v<float>;
@@ -152,13 +168,21 @@ class PolarGround {
           }
           const float rc = (static_cast<float>(b) + 0.5F) * inv;
           const float r = rc * rc;
+          if (lane_only && std::fabs(r * sn) > kLaneHalfWidth) continue;
           const Eigen::Vector3f a(1.0F, r * cs, r * sn);
           const float z = zmin_[c];
-          if (std::fabs(z - plane_.dot(a)) > (pass == 0 ? 0.5F : 0.15F)) continue;
+          const float dz = z - plane_.dot(a);
+          if (std::fabs(dz) > (pass == 0 ? 0.5F : 0.15F)) continue;
+          if (pass == 1 && lane_fit && dz > p.curb_min_m) continue;  // past a kerb
           A += a * a.transpose();
           rhs += a * z;
           ++used;
         }
+      }
+      if (used < 20 && lane_only) {
+        lane_fit = false;
+        pass = -1;  // start again, all round
+        continue;
       }
       if (used < 20) return;
       A += 1.0F * Eigen::Matrix3f::Identity() * 1e-3F;  // keeps a one-sided fit well posed
