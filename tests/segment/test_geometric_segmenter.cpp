@@ -9,6 +9,7 @@
 #include <initializer_list>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <semlio/core/labels.hpp>
@@ -377,6 +378,65 @@ TEST_CASE("GeometricSegmenter finds a sign panel on top of a post", "[segment]")
       for (const Class c : scan.labels) signs += c == Class::kTrafficSign ? 1U : 0U;
       INFO("crown " << crown);
       CHECK(signs == 0);
+    }
+  }
+}
+
+namespace {
+// Flat road and, 15 m ahead on it, a rider seen from behind: the rider's back
+// and rear wheel (a `width_m` wide surface from 0.1 m to `height_m`) and the
+// frame behind them (0.3-0.6 m up, 1.7 m long). Label kBicyclist.
+semlio::Scan rider_scene(float width_m, float height_m) {
+  semlio::Scan scan;
+  add_ground(scan, 20.0F);
+  const float ground_z = -static_cast<float>(semlio_test::kSceneSensorHeight);
+  for (float y = -0.5F * width_m; y <= 0.5F * width_m + 1e-3F; y += 0.03F) {
+    for (float h = 0.1F; h <= height_m + 1e-3F; h += 0.05F) {
+      scan.points.emplace_back(15.0F, y, ground_z + h);
+      scan.labels.push_back(Class::kBicyclist);
+    }
+  }
+  for (float x = 15.1F; x <= 16.7F; x += 0.05F) {
+    for (float h = 0.3F; h <= 0.6F; h += 0.1F) {
+      scan.points.emplace_back(x, 0.0F, ground_z + h);
+      scan.labels.push_back(Class::kBicyclist);
+    }
+  }
+  return scan;
+}
+}  // namespace
+
+TEST_CASE("GeometricSegmenter finds a rider on the road", "[segment]") {
+  const semlio::GeometricSegmenter seg;
+  SECTION("a 0.6 m wide, 1.75 m tall rider seen from behind") {
+    semlio::Scan scan = rider_scene(0.6F, 1.75F);
+    const std::vector<Class> truth = scan.labels;
+    seg.segment(scan);
+    std::size_t rider = 0, rider_ok = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      if (truth[i] != Class::kBicyclist) continue;
+      ++rider;
+      rider_ok += scan.labels[i] == Class::kBicyclist ? 1U : 0U;
+    }
+    INFO(rider_ok << " / " << rider << " rider points");
+    REQUIRE(rider > 500);
+    CHECK(rider_ok > 9 * rider / 10);
+  }
+  SECTION("the configured rider class is used") {
+    semlio::Scan scan = rider_scene(0.6F, 1.75F);
+    semlio::GeometricSegmenter(semlio::GeometricSegmenterConfig{.rider_class = Class::kMotorcyclist}).segment(scan);
+    std::size_t motorcyclist = 0;
+    for (const Class c : scan.labels) motorcyclist += c == Class::kMotorcyclist ? 1U : 0U;
+    CHECK(motorcyclist > 500);
+  }
+  SECTION("a car's 1.7 m wide rear, or a 1.4 m tall one, is no rider") {
+    for (const auto& [width, height] : {std::pair{1.7F, 1.75F}, std::pair{0.6F, 1.4F}}) {
+      semlio::Scan scan = rider_scene(width, height);
+      seg.segment(scan);
+      std::size_t riders = 0;
+      for (const Class c : scan.labels) riders += c == Class::kBicyclist ? 1U : 0U;
+      INFO("width " << width << " height " << height);
+      CHECK(riders == 0);
     }
   }
 }

@@ -19,6 +19,13 @@
 ///    (0.4 m cells) with per-cell heights above ground, grouped into
 ///    8-connected components, classified in this order:
 ///    - below `min_object_height_m` -> kUnlabeled (clutter);
+///    - rider-sized (top 1.5-2.0 m and in view, reaching down below 0.5 m,
+///      footprint <= 2.8 m, at least half over road) and 0.3-1.2 m wide
+///      across the line of sight (no car shows less than its 1.5-2 m width)
+///      -> `rider_class` (kBicyclist by default): a person on a two-wheeler
+///      seen from ahead or behind. Pedestrians are not looked for: a
+///      person-sized rule turned bushes, young trunks and fence ends of the
+///      simulated worlds into people;
 ///    - car-sized (smallest-area footprint 2-6.5 m x <= 2.8 m, top 1.35-2.3 m,
 ///      reaching down below 0.7 m, at least half over road, or 30 % when its
 ///      surface is not foliage-rough: parked on a curb or in a bay) -> kCar;
@@ -101,6 +108,19 @@ struct GeometricSegmenterConfig {
   double car_max_base_m = 0.7;       ///< a car reaches down to at least this height [m]
   double car_min_road_fraction = 0.3;  ///< cars stand on the road: this share of their points at least (a car parked with two wheels on the curb, or in a bay the ground walk calls sidewalk, has half or less over road)
   double car_row_min_road_fraction = 0.5;  ///< cars parked in a row (merged into one component) stand on the road: this share of their points at least (a long low component partly off the road is more often a hedge)
+  // Riders: a person on a bicycle or motorcycle seen from ahead or behind,
+  // as long as a small car but much narrower across the line of sight.
+  double rider_min_height_m = 1.5;   ///< top of a rider at least this high [m]: a seated adult's head is 1.5-1.9 m above the road; most cars are lower (1.4-1.5 m), so a car partly hidden behind another is not taken for one
+  double rider_max_height_m = 2.0;   ///< ... and at most [m]: above any rider; vans and buses are taller
+  double rider_max_base_m = 0.5;     ///< a rider reaches down to at least this height [m] (wheels on the road; a higher base is the top of something behind an occluder)
+  double rider_min_width_m = 0.3;    ///< visible width across the line of sight at least [m]: a rider's shoulders 0.4-0.5 m; thinner is a post
+  double rider_max_width_m = 1.2;    ///< ... and at most [m]: a two-wheeler with its rider is 0.6-0.9 m wide, a car shows at least its 1.5-2 m width from any side
+  double rider_max_length_m = 2.8;   ///< a rider's grid footprint at most [m]: a 2.3 m motorcycle plus a 0.4 m cell of quantisation
+  double rider_min_road_fraction = 0.5;  ///< riders ride on the road: this share of their points at least (bushes and posts at the verge are not)
+  /// Class given to riders: geometry cannot tell a bicycle from a
+  /// motorcycle; bicyclists are the more common in SemanticKITTI, and the
+  /// simulator's riders are bicyclists.
+  Class rider_class = Class::kBicyclist;
   double truck_min_length_m = 5.0;   ///< truck/bus footprint length range (visible part) [m]
   double truck_max_length_m = 12.0;
   double truck_max_width_m = 3.2;    ///< truck footprint width limit [m]
@@ -378,6 +398,7 @@ class GeometricSegmenter {
     const Extent e = extent(comp.begin, comp.end, [](std::uint32_t) { return true; });
     const auto f = [](double v) { return static_cast<float>(v); };
     if (e.h_max_m < f(c.min_object_height_m)) return set_all(comp, Class::kUnlabeled);
+    if (is_rider(comp, e)) return set_all(comp, c.rider_class);
     if (e.length_m >= f(c.car_min_length_m) && e.length_m <= f(c.car_max_length_m) && e.width_m <= f(c.car_max_width_m) &&
         e.h_max_m >= f(c.car_min_height_m) && e.h_max_m <= f(c.car_max_height_m) && e.h_min_m <= f(c.car_max_base_m) &&
         e.road_fraction >= f(c.car_min_road_fraction) &&
@@ -418,6 +439,26 @@ class GeometricSegmenter {
       return set_all(comp, Class::kVegetation);
     }
     split_tall(comp);
+  }
+
+  // True for a rider seen from ahead or behind: rider-high, standing on the
+  // road, car-long at most, but narrower across the line of sight than any
+  // car. Heights must be in view (a cluster cut off by the top beam may be
+  // anything taller). Seen from the side a two-wheeler is as wide as it is
+  // long and is not recognised.
+  bool is_rider(const detail::GridComponent& comp, const Extent& e) const {
+    const Config& c = config_;
+    const auto f = [](double v) { return static_cast<float>(v); };
+    if (e.h_max_m < f(c.rider_min_height_m) || e.h_max_m > f(c.rider_max_height_m) || e.h_min_m > f(c.rider_max_base_m) ||
+        e.length_m > f(c.rider_max_length_m) || e.road_fraction < f(c.rider_min_road_fraction)) {
+      return false;
+    }
+    for (std::uint32_t k = comp.begin; k < comp.end; ++k) {
+      if (top_m(grid_.order()[k]) == std::numeric_limits<float>::infinity()) return false;
+    }
+    stack_.assign(grid_.order().begin() + comp.begin, grid_.order().begin() + comp.end);
+    const float visible = stack_width_m();
+    return visible >= f(c.rider_min_width_m) && visible <= f(c.rider_max_width_m);
   }
 
   // Grows the sub-component of seed over the cells of the same component that
