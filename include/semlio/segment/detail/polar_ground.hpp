@@ -101,6 +101,8 @@ class PolarGround {
     fit_local_plane(sectors, bins, p);
     // Walk each sector outwards.
     for (int s = 0; s < sectors; ++s) walk_sector(s, bins, p);
+    // Kerbs crossed along a ring (sidewalks the walk outwards cannot see).
+    mark_raised_arcs(sectors, bins, p);
     // Label points.
     for (std::size_t i = 0; i < n; ++i) {
       if (bin_of_[i] < 0) {
@@ -260,6 +262,79 @@ class PolarGround {
     }
   }
 
+  // Kerbs along a ring: in each range bin up to kMaxRingRange, the ground
+  // bins are followed around the sensor from a road bin. A rise of
+  // curb_min_m..kMaxKerb between neighbouring ground bins (at most kMaxGap
+  // apart) off a road bin, later followed by a drop of the same size (within
+  // kMaxRamp of arc: a kerb or a dropped kerb's ramp) back to within
+  // curb_min_m / 2 of that road height, is a raised strip crossed twice. A
+  // vehicle within a few metres of a kerb has the sidewalk beside it inside
+  // its nearest rings, and on a crowned road the sidewalk is barely above a
+  // plane through the lane, so the walk outwards takes it for road. The
+  // strip's road bins that stay raised by at least curb_min_m / 2 become
+  // sidewalk. Without the drop (a long ramp, a slope) nothing changes.
+  void mark_raised_arcs(int sectors, int bins, const PolarGroundParams& p) {
+    constexpr float kMaxRingRange = 20.0F;  // [m]: farther rings are too sparse for a 0.1 m step between sectors
+    constexpr float kMaxKerb = 0.3F;        // [m]: kerbs are 0.10-0.20 m (up to 0.25 m at bus stops); higher is a wall's foot
+    constexpr float kMaxGap = 1.0F;         // [m]: farther apart, cross fall (2-3 %) and bumps mask a kerb
+    constexpr float kMaxRamp = 2.0F;        // [m]: a dropped kerb (driveway, crossing) ramps down over 1-2 m; cross fall takes 3+ m for curb_min_m
+    const float inv = 1.0F / p.bins_per_sqrt_m;
+    const float sector_rad = 2.0F * std::numbers::pi_v<float> / static_cast<float>(sectors);
+    for (int b = 0; b < bins; ++b) {
+      const float rc = (static_cast<float>(b) + 0.5F) * inv;
+      const float r = rc * rc;
+      if (r > kMaxRingRange) break;
+      ring_.clear();
+      int start = -1;
+      for (int s = 0; s < sectors; ++s) {
+        const auto c = static_cast<std::size_t>(s * bins + b);
+        if (flat_[c] == 0U) continue;
+        if (start < 0 && state_[c] == GroundKind::kRoad) start = static_cast<int>(ring_.size());
+        ring_.push_back(s);
+      }
+      const auto n = static_cast<int>(ring_.size());
+      if (start < 0 || n < 3) continue;
+      const auto bin = [&](int k) { return static_cast<std::size_t>(ring_[static_cast<std::size_t>((start + k) % n)] * bins + b); };
+      int up = -1;  // ring index of the first raised bin, -1: none open
+      float road_z = 0.0F;
+      for (int k = 1; k < n; ++k) {
+        const std::size_t prev = bin(k - 1);
+        const std::size_t cur = bin(k);
+        const int gap = (ring_[static_cast<std::size_t>((start + k) % n)] - ring_[static_cast<std::size_t>((start + k - 1) % n)] + sectors) % sectors;
+        if (static_cast<float>(gap) * sector_rad * r > kMaxGap) {
+          up = -1;  // the ring is broken here: no step can be judged across
+          continue;
+        }
+        const float dz = ground_z_[cur] - ground_z_[prev];
+        if (up < 0) {
+          if (state_[prev] == GroundKind::kRoad && dz >= p.curb_min_m && dz <= kMaxKerb) {
+            up = k;
+            road_z = ground_z_[prev];
+          }
+        } else if (ground_z_[cur] <= road_z + 0.5F * p.curb_min_m) {
+          // Back at road height: a kerb (or a dropped kerb's ramp) when the
+          // ring fell by curb_min_m..kMaxKerb within the last kMaxRamp of arc.
+          float high = -std::numeric_limits<float>::infinity();
+          int arc_sectors = 0;
+          for (int j = k - 1; j >= up; --j) {
+            const int step = (ring_[static_cast<std::size_t>((start + j + 1) % n)] - ring_[static_cast<std::size_t>((start + j) % n)] + sectors) % sectors;
+            arc_sectors += step;
+            if (static_cast<float>(arc_sectors) * sector_rad * r > kMaxRamp) break;
+            high = std::max(high, ground_z_[bin(j)]);
+          }
+          const float drop = high - ground_z_[cur];
+          if (drop >= p.curb_min_m && drop <= kMaxKerb) {
+            for (int j = up; j < k; ++j) {
+              const std::size_t c = bin(j);
+              if (state_[c] == GroundKind::kRoad && ground_z_[c] >= road_z + 0.5F * p.curb_min_m) state_[c] = GroundKind::kSidewalk;
+            }
+          }
+          up = -1;  // closed, or came back down gradually: a slope, not a kerb
+        }
+      }
+    }
+  }
+
   Eigen::Vector3f plane_ = Eigen::Vector3f::Zero();  // local ground plane (c0, cx, cy)
   int sectors_ = 1;
   std::vector<float> zmin_;
@@ -269,6 +344,7 @@ class PolarGround {
   std::vector<GroundKind> state_;
   std::vector<std::uint8_t> flat_;  // 1: the bin passed as ground (flat, reachable)
   std::vector<std::int32_t> bin_of_;
+  std::vector<int> ring_;  // mark_raised_arcs: sectors of one ring's ground bins
 };
 
 }  // namespace semlio::detail
