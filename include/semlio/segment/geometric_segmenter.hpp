@@ -13,12 +13,22 @@
 ///    vehicle and the road bins so far) is road (`Class::kRoad`; parking is
 ///    not told apart); past a curb step up it is sidewalk, past a step down
 ///    (a verge) or more than `sidewalk_width_m` behind the curb it is
-///    terrain. With `split_ground = false` all ground is kRoad (one ground
-///    class, as the issue allows).
+///    terrain. Road bins between a kerb step up and a step (or a ramp of at
+///    most 2 m) back down along the same ring of range bins, within 20 m,
+///    are sidewalk too: beside a vehicle near the kerb, or on a crowned road,
+///    the walk outwards never sees the kerb. With `split_ground = false` all
+///    ground is kRoad (one ground class, as the issue allows).
 /// 2. Objects (detail/obstacle_grid.hpp): the other points go into a 2D grid
 ///    (0.4 m cells) with per-cell heights above ground, grouped into
 ///    8-connected components, classified in this order:
 ///    - below `min_object_height_m` -> kUnlabeled (clutter);
+///    - rider-sized (top 1.5-2.0 m and in view, reaching down below 0.5 m,
+///      footprint <= 2.8 m, at least half over road) and 0.3-1.2 m wide
+///      across the line of sight (no car shows less than its 1.5-2 m width)
+///      -> `rider_class` (kBicyclist by default): a person on a two-wheeler
+///      seen from ahead or behind. Pedestrians are not looked for: a
+///      person-sized rule turned bushes, young trunks and fence ends of the
+///      simulated worlds into people;
 ///    - car-sized (smallest-area footprint 2-6.5 m x <= 2.8 m, top 1.35-2.3 m,
 ///      reaching down below 0.7 m, at least half over road, or 30 % when its
 ///      surface is not foliage-rough: parked on a curb or in a bay) -> kCar;
@@ -39,6 +49,12 @@
 ///      group of ground-standing cells that rises 1 m above the rest, e.g. a
 ///      pole in a bush: trunk when a crown surrounds it, pole when at most a
 ///      sign or an arm is beside it); the rest (canopy) -> kVegetation.
+///    Then traffic signs: a free-standing column (pole, trunk or a wall
+///    fragment at most a panel wide) whose visible width across the line of
+///    sight jumps from a post's (<= 0.25 m, seen over most of its height) to
+///    a flat panel's (0.3-1.5 m) at 1.2 m or higher, up to its top (<= 4.5 m),
+///    is a pole below a kTrafficSign. Geometry only: the retro-reflective
+///    face is bright, but signs seen from behind or the side are not.
 ///    Heights are judged knowing the field of view: a cell whose top reaches
 ///    the highest beam (+2 deg) counts as taller than any threshold (a wall
 ///    10 m away looks only ~2 m tall to a 64-beam KITTI lidar).
@@ -95,6 +111,19 @@ struct GeometricSegmenterConfig {
   double car_max_base_m = 0.7;       ///< a car reaches down to at least this height [m]
   double car_min_road_fraction = 0.3;  ///< cars stand on the road: this share of their points at least (a car parked with two wheels on the curb, or in a bay the ground walk calls sidewalk, has half or less over road)
   double car_row_min_road_fraction = 0.5;  ///< cars parked in a row (merged into one component) stand on the road: this share of their points at least (a long low component partly off the road is more often a hedge)
+  // Riders: a person on a bicycle or motorcycle seen from ahead or behind,
+  // as long as a small car but much narrower across the line of sight.
+  double rider_min_height_m = 1.5;   ///< top of a rider at least this high [m]: a seated adult's head is 1.5-1.9 m above the road; most cars are lower (1.4-1.5 m), so a car partly hidden behind another is not taken for one
+  double rider_max_height_m = 2.0;   ///< ... and at most [m]: above any rider; vans and buses are taller
+  double rider_max_base_m = 0.5;     ///< a rider reaches down to at least this height [m] (wheels on the road; a higher base is the top of something behind an occluder)
+  double rider_min_width_m = 0.3;    ///< visible width across the line of sight at least [m]: a rider's shoulders 0.4-0.5 m; thinner is a post
+  double rider_max_width_m = 1.2;    ///< ... and at most [m]: a two-wheeler with its rider is 0.6-0.9 m wide, a car shows at least its 1.5-2 m width from any side
+  double rider_max_length_m = 2.8;   ///< a rider's grid footprint at most [m]: a 2.3 m motorcycle plus a 0.4 m cell of quantisation
+  double rider_min_road_fraction = 0.5;  ///< riders ride on the road: this share of their points at least (bushes and posts at the verge are not)
+  /// Class given to riders: geometry cannot tell a bicycle from a
+  /// motorcycle; bicyclists are the more common in SemanticKITTI, and the
+  /// simulator's riders are bicyclists.
+  Class rider_class = Class::kBicyclist;
   double truck_min_length_m = 5.0;   ///< truck/bus footprint length range (visible part) [m]
   double truck_max_length_m = 12.0;
   double truck_max_width_m = 3.2;    ///< truck footprint width limit [m]
@@ -134,6 +163,24 @@ struct GeometricSegmenterConfig {
   double wall_max_roughness_m = 0.15;
   /// Fewest points (cell and neighbours) to judge roughness; fewer are taken as planar.
   int roughness_min_points = 8;
+  // Traffic signs: a free-standing column (pole or trunk with no canopy)
+  // whose top is a flat panel much wider than the post under it.
+  double sign_slice_m = 0.2;         ///< height slices in which a column's visible width is measured [m]: two or more beams on a sign 10-20 m away
+  double sign_min_base_m = 1.2;      ///< a sign panel starts at least this high [m]: above bushes and parked-car roofs; panels over footways hang at 2-2.5 m, over verges from ~1.5 m
+  double sign_max_top_m = 4.5;       ///< ... and ends at most this high [m]: panels are mounted at 1.8-3.5 m (issue #38) plus their own size; street-light heads are higher
+  double sign_min_width_m = 0.3;     ///< visible panel width at least [m]: the smallest panels are 0.4 m (0.3 when seen 40 deg off-axis)
+  double sign_max_width_m = 1.5;     ///< ... and at most [m]: single-post panels are up to ~1.2 m
+  double sign_max_panel_height_m = 1.6;  ///< panel (or stack of panels) at most this tall [m]
+  double sign_max_post_width_m = 0.25;   ///< the post under a panel is at most this wide (visible) [m]: sign posts are 0.05-0.2 m
+  double sign_post_min_height_m = 0.6;   ///< ... measured above this height [m]: grass, litter and kerb stones at its foot are lower
+  /// The post is seen in at least this share of the height slices between
+  /// sign_post_min_height_m and the panel: a post is continuous, whereas the
+  /// top of a wall seen over a bush or a car shows only in patches.
+  double sign_min_post_cover = 0.6;
+  /// The panel's points spread at most this much across their best-fitting
+  /// vertical plane (standard deviation) [m]: a panel is flat (range noise
+  /// ~0.02 m), the crown of a young tree on a thin trunk is rough (0.1-0.3 m).
+  double sign_max_roughness_m = 0.06;
   double top_beam_elevation_rad = 0.0349;  ///< elevation of the highest beam (HDL-64E: +2 deg) [rad]
   double clip_margin_m = 0.15;       ///< a cell reaching within this of the highest visible height is cut off by the field of view [m]
 };
@@ -182,6 +229,7 @@ class GeometricSegmenter {
     build_grid(scan);
     grid_.connect();
     for (const detail::GridComponent& comp : grid_.components()) classify(comp);
+    find_signs(scan);
     label_objects(scan);
   }
 
@@ -353,6 +401,7 @@ class GeometricSegmenter {
     const Extent e = extent(comp.begin, comp.end, [](std::uint32_t) { return true; });
     const auto f = [](double v) { return static_cast<float>(v); };
     if (e.h_max_m < f(c.min_object_height_m)) return set_all(comp, Class::kUnlabeled);
+    if (is_rider(comp, e)) return set_all(comp, c.rider_class);
     if (e.length_m >= f(c.car_min_length_m) && e.length_m <= f(c.car_max_length_m) && e.width_m <= f(c.car_max_width_m) &&
         e.h_max_m >= f(c.car_min_height_m) && e.h_max_m <= f(c.car_max_height_m) && e.h_min_m <= f(c.car_max_base_m) &&
         e.road_fraction >= f(c.car_min_road_fraction) &&
@@ -393,6 +442,26 @@ class GeometricSegmenter {
       return set_all(comp, Class::kVegetation);
     }
     split_tall(comp);
+  }
+
+  // True for a rider seen from ahead or behind: rider-high, standing on the
+  // road, car-long at most, but narrower across the line of sight than any
+  // car. Heights must be in view (a cluster cut off by the top beam may be
+  // anything taller). Seen from the side a two-wheeler is as wide as it is
+  // long and is not recognised.
+  bool is_rider(const detail::GridComponent& comp, const Extent& e) const {
+    const Config& c = config_;
+    const auto f = [](double v) { return static_cast<float>(v); };
+    if (e.h_max_m < f(c.rider_min_height_m) || e.h_max_m > f(c.rider_max_height_m) || e.h_min_m > f(c.rider_max_base_m) ||
+        e.length_m > f(c.rider_max_length_m) || e.road_fraction < f(c.rider_min_road_fraction)) {
+      return false;
+    }
+    for (std::uint32_t k = comp.begin; k < comp.end; ++k) {
+      if (top_m(grid_.order()[k]) == std::numeric_limits<float>::infinity()) return false;
+    }
+    stack_.assign(grid_.order().begin() + comp.begin, grid_.order().begin() + comp.end);
+    const float visible = stack_width_m();
+    return visible >= f(c.rider_min_width_m) && visible <= f(c.rider_max_width_m);
   }
 
   // Grows the sub-component of seed over the cells of the same component that
@@ -652,6 +721,137 @@ class GeometricSegmenter {
     }
   }
 
+  // Traffic signs: among the free-standing columns (8-connected cells
+  // labelled pole or trunk with no canopy above), those whose visible width
+  // across the line of sight jumps from a post's (<= sign_max_post_width_m)
+  // to a panel's (sign_min_width_m..sign_max_width_m) at sign_min_base_m or
+  // higher and stays so up to the column's top, with the panel's points on
+  // a vertical plane, become a pole (post) below a traffic sign (panel). A
+  // sign's wide panel is also what makes a sign post look like a trunk.
+  void find_signs(const Scan& scan) const {
+    const Config& c = config_;
+    const auto f = [](double v) { return static_cast<float>(v); };
+    const auto is_column = [&](std::uint32_t cell) {
+      const detail::GridCell& g = grid_.cell(cell);
+      return g.count > 0 &&
+             (g.label == id(Class::kPole) || g.label == id(Class::kTrunk) || g.label == id(Class::kBuilding)) &&
+             (g.upper_label == g.label || g.split_m == std::numeric_limits<float>::infinity());
+    };
+    for (const std::uint32_t cell : grid_.touched()) grid_.cell(cell).mark = -1;
+    col_dir_.clear();
+    std::int32_t columns = 0;
+    constexpr std::int32_t kTooWide = std::numeric_limits<std::int32_t>::max();
+    for (const std::uint32_t cell : grid_.touched()) {
+      if (grid_.cell(cell).mark != -1 || !is_column(cell)) continue;
+      grow(cell, columns, is_column);
+      // A sign's panel spans up to sign_max_width_m and its cells; wider
+      // groups (walls, a pole against a wall) are no single sign.
+      if (stack_size_m() > f(c.sign_max_width_m) + grid_.cell_size_m()) {
+        for (const std::uint32_t o : stack_) grid_.cell(o).mark = kTooWide;
+        continue;
+      }
+      ++columns;
+      const Eigen::Vector2f p = grid_.centre(cell);
+      col_dir_.push_back(p.norm() > 1e-3F ? Eigen::Vector2f(p.normalized()) : Eigen::Vector2f(1.0F, 0.0F));
+    }
+    if (columns == 0) return;
+    const float slice = f(c.sign_slice_m);
+    const int slices = std::max(1, static_cast<int>(std::ceil(f(c.sign_max_top_m) / slice)));
+    const auto k_cols = static_cast<std::size_t>(columns);
+    const auto k_slices = static_cast<std::size_t>(slices);
+    col_t_min_.assign(k_cols * k_slices, std::numeric_limits<float>::infinity());
+    col_t_max_.assign(k_cols * k_slices, -std::numeric_limits<float>::infinity());
+    col_top_m_.assign(k_cols, -std::numeric_limits<float>::infinity());
+    col_base_m_.assign(k_cols, std::numeric_limits<float>::infinity());
+    // Pass 1: visible width per column and height slice.
+    const auto column_of = [&](std::size_t i) -> std::int32_t {
+      if (cell_of_[i] < 0 || kind_[i] != detail::GroundKind::kObstacle) return -1;
+      const auto cell = static_cast<std::uint32_t>(cell_of_[i]);
+      return is_column(cell) && grid_.cell(cell).mark != kTooWide ? grid_.cell(cell).mark : -1;
+    };
+    for (std::size_t i = 0; i < scan.points.size(); ++i) {
+      const std::int32_t k = column_of(i);
+      if (k < 0) continue;
+      const auto ks = static_cast<std::size_t>(k);
+      const float h = height_m_[i];
+      col_top_m_[ks] = std::max(col_top_m_[ks], h);
+      col_base_m_[ks] = std::min(col_base_m_[ks], h);
+      if (h >= f(c.sign_max_top_m)) continue;
+      const auto s = static_cast<std::size_t>(std::clamp(static_cast<int>(h / slice), 0, slices - 1));
+      const Eigen::Vector3f& q = scan.points[i];
+      const float t = col_dir_[ks].x() * q.y() - col_dir_[ks].y() * q.x();
+      col_t_min_[ks * k_slices + s] = std::min(col_t_min_[ks * k_slices + s], t);
+      col_t_max_[ks * k_slices + s] = std::max(col_t_max_[ks * k_slices + s], t);
+    }
+    // Panel base per column (infinity: no sign).
+    col_panel_m_.assign(k_cols, std::numeric_limits<float>::infinity());
+    for (std::size_t k = 0; k < k_cols; ++k) {
+      if (col_top_m_[k] > f(c.sign_max_top_m) || col_base_m_[k] > f(c.stem_max_base_m)) continue;  // too tall, or not standing
+      float post = 0.0F;
+      int post_slices = 0;   // slices between sign_post_min_height_m and the panel ...
+      int post_seen = 0;     // ... and those with points
+      float base = std::numeric_limits<float>::infinity();
+      bool ok = true;
+      for (std::size_t s = 0; s < k_slices; ++s) {
+        const float lo = col_t_min_[k * k_slices + s];
+        const float hi = col_t_max_[k * k_slices + s];
+        const float h = static_cast<float>(s) * slice;
+        if (base == std::numeric_limits<float>::infinity() && h >= f(c.sign_post_min_height_m)) ++post_slices;
+        if (!(hi >= lo)) continue;  // no points at this height (occluded)
+        const float w = hi - lo;
+        if (base == std::numeric_limits<float>::infinity()) {
+          if (h >= f(c.sign_min_base_m) && w >= f(c.sign_min_width_m)) {
+            base = h;
+          } else if (h >= f(c.sign_post_min_height_m)) {
+            post = std::max(post, w);
+            ++post_seen;
+          }
+        }
+        if (base != std::numeric_limits<float>::infinity() && w > f(c.sign_max_width_m)) ok = false;
+      }
+      // The panel's own first slice was counted as a post slice.
+      const bool post_visible = post_seen > 0 && static_cast<double>(post_seen) >= c.sign_min_post_cover * (post_slices - 1);
+      if (ok && post_visible && post <= f(c.sign_max_post_width_m) && base < col_top_m_[k] &&
+          col_top_m_[k] - base <= f(c.sign_max_panel_height_m)) {
+        col_panel_m_[k] = base;
+      }
+    }
+    // Pass 2: the panel's flatness (horizontal spread across its best line).
+    col_moments_.assign(k_cols * 6, 0.0);
+    for (std::size_t i = 0; i < scan.points.size(); ++i) {
+      const std::int32_t k = column_of(i);
+      if (k < 0 || height_m_[i] < col_panel_m_[static_cast<std::size_t>(k)]) continue;
+      double* m = &col_moments_[static_cast<std::size_t>(k) * 6];
+      const auto x = static_cast<double>(scan.points[i].x());
+      const auto y = static_cast<double>(scan.points[i].y());
+      m[0] += 1.0;
+      m[1] += x;
+      m[2] += y;
+      m[3] += x * x;
+      m[4] += y * y;
+      m[5] += x * y;
+    }
+    for (const std::uint32_t cell : grid_.touched()) {
+      detail::GridCell& g = grid_.cell(cell);
+      if (g.mark < 0 || g.mark == kTooWide) continue;  // only columns were marked above
+      const auto k = static_cast<std::size_t>(g.mark);
+      if (col_panel_m_[k] == std::numeric_limits<float>::infinity()) continue;
+      const double* m = &col_moments_[k * 6];
+      if (m[0] < 3.0) continue;
+      const double mx = m[1] / m[0];
+      const double my = m[2] / m[0];
+      const double cxx = m[3] / m[0] - mx * mx;
+      const double cyy = m[4] / m[0] - my * my;
+      const double cxy = m[5] / m[0] - mx * my;
+      const double half_trace = 0.5 * (cxx + cyy);
+      const double minor = half_trace - std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
+      if (std::sqrt(std::max(0.0, minor)) > c.sign_max_roughness_m) continue;
+      g.label = id(Class::kPole);
+      g.upper_label = id(Class::kTrafficSign);
+      g.split_m = col_panel_m_[k];
+    }
+  }
+
   void label_objects(Scan& scan) const {
     for (std::size_t i = 0; i < scan.points.size(); ++i) {
       if (cell_of_[i] < 0) continue;
@@ -671,6 +871,15 @@ class GeometricSegmenter {
   mutable std::vector<std::int32_t> cell_of_;
   mutable std::vector<std::uint32_t> stack_;
   mutable std::vector<std::uint32_t> group_;
+  // find_signs: per column, its reference direction, visible width per height
+  // slice, height range, panel base and panel point moments.
+  mutable std::vector<Eigen::Vector2f> col_dir_;
+  mutable std::vector<float> col_t_min_;
+  mutable std::vector<float> col_t_max_;
+  mutable std::vector<float> col_top_m_;
+  mutable std::vector<float> col_base_m_;
+  mutable std::vector<float> col_panel_m_;
+  mutable std::vector<double> col_moments_;
 };
 
 static_assert(Segmenter<GeometricSegmenter>);

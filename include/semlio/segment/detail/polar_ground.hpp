@@ -101,6 +101,8 @@ class PolarGround {
     fit_local_plane(sectors, bins, p);
     // Walk each sector outwards.
     for (int s = 0; s < sectors; ++s) walk_sector(s, bins, p);
+    // Kerbs crossed along a ring (sidewalks the walk outwards cannot see).
+    mark_raised_arcs(sectors, bins, p);
     // Label points.
     for (std::size_t i = 0; i < n; ++i) {
       if (bin_of_[i] < 0) {
@@ -127,19 +129,35 @@ class PolarGround {
 
  private:
   // Fits z = c0 + cx x + cy y to the lowest points of the flat bins 3-12 m
-  // away (least squares, then again without bins more than 0.15 m off): the
-  // road under and around the vehicle, including the sensor's roll and pitch
-  // relative to it. Falls back to z = -sensor_height with too few bins.
+  // away: the road under and around the vehicle, including the sensor's roll
+  // and pitch relative to it. Pass 0 uses only the bins ahead of and behind
+  // the vehicle in its own lane (centres within kLaneHalfWidth of its heading
+  // axis), within 0.5 m of the sensor-height plane: the vehicle drives along
+  // its road, so these are the road, whereas the bins beside it may be a
+  // sidewalk a kerb higher (a car driving ~3 m from the kerb sees only
+  // sidewalk to its side, since an HDL-64E's lowest ring meets the ground
+  // 3.7 m out; an all-round fit sits between road and sidewalk and shrinks
+  // the kerb step below curb_min_m, and raised verges tilt it the same way).
+  // Pass 1 refits on all bins from 0.15 m below that plane (cross fall to
+  // the gutters, dips) to curb_min_m above it (higher is past a kerb). With
+  // fewer than 20 bins in the lane (a car just ahead and behind), pass 0
+  // takes all bins and pass 1 keeps bins within 0.15 m either way, as an
+  // all-round fit. Falls back to z = -sensor_height with too few bins.
   void fit_local_plane(int sectors, int bins, const PolarGroundParams& p) {
     sectors_ = sectors;
     plane_ = Eigen::Vector3f(-p.sensor_height_m, 0.0F, 0.0F);
     const float inv = 1.0F / p.bins_per_sqrt_m;
     const int b0 = static_cast<int>(std::sqrt(3.0F) * p.bins_per_sqrt_m);
     const int b1 = std::min(bins - 1, static_cast<int>(std::sqrt(12.0F) * p.bins_per_sqrt_m));
+    // Half the width of a lane (2.75-3.75 m) [m]: the vehicle's own lane,
+    // even when the vehicle is 0.3 m off its centre line.
+    constexpr float kLaneHalfWidth = 1.5F;
+    bool lane_fit = true;  // false: too few bins in the lane, fit all round
     for (int pass = 0; pass < 2; ++pass) {
       Eigen::Matrix3f A = Eigen::Matrix3f::Zero();
       Eigen::Vector3f rhs = Eigen::Vector3f::Zero();
       int used = 0;
+      const bool lane_only = pass == 0 && lane_fit;
       for (int s = 0; s < sectors; ++s) {
         const float az = (static_cast<float>(s) + 0.5F) * 2.0F * std::numbers::pi_v<float> / static_cast<float>(sectors) -
                          std::numbers::pi_v<float>;
@@ -152,13 +170,21 @@ class PolarGround {
           }
           const float rc = (static_cast<float>(b) + 0.5F) * inv;
           const float r = rc * rc;
+          if (lane_only && std::fabs(r * sn) > kLaneHalfWidth) continue;
           const Eigen::Vector3f a(1.0F, r * cs, r * sn);
           const float z = zmin_[c];
-          if (std::fabs(z - plane_.dot(a)) > (pass == 0 ? 0.5F : 0.15F)) continue;
+          const float dz = z - plane_.dot(a);
+          if (std::fabs(dz) > (pass == 0 ? 0.5F : 0.15F)) continue;
+          if (pass == 1 && lane_fit && dz > p.curb_min_m) continue;  // past a kerb
           A += a * a.transpose();
           rhs += a * z;
           ++used;
         }
+      }
+      if (used < 20 && lane_only) {
+        lane_fit = false;
+        pass = -1;  // start again, all round
+        continue;
       }
       if (used < 20) return;
       A += 1.0F * Eigen::Matrix3f::Identity() * 1e-3F;  // keeps a one-sided fit well posed
@@ -236,6 +262,79 @@ class PolarGround {
     }
   }
 
+  // Kerbs along a ring: in each range bin up to kMaxRingRange, the ground
+  // bins are followed around the sensor from a road bin. A rise of
+  // curb_min_m..kMaxKerb between neighbouring ground bins (at most kMaxGap
+  // apart) off a road bin, later followed by a drop of the same size (within
+  // kMaxRamp of arc: a kerb or a dropped kerb's ramp) back to within
+  // curb_min_m / 2 of that road height, is a raised strip crossed twice. A
+  // vehicle within a few metres of a kerb has the sidewalk beside it inside
+  // its nearest rings, and on a crowned road the sidewalk is barely above a
+  // plane through the lane, so the walk outwards takes it for road. The
+  // strip's road bins that stay raised by at least curb_min_m / 2 become
+  // sidewalk. Without the drop (a long ramp, a slope) nothing changes.
+  void mark_raised_arcs(int sectors, int bins, const PolarGroundParams& p) {
+    constexpr float kMaxRingRange = 20.0F;  // [m]: farther rings are too sparse for a 0.1 m step between sectors
+    constexpr float kMaxKerb = 0.3F;        // [m]: kerbs are 0.10-0.20 m (up to 0.25 m at bus stops); higher is a wall's foot
+    constexpr float kMaxGap = 1.0F;         // [m]: farther apart, cross fall (2-3 %) and bumps mask a kerb
+    constexpr float kMaxRamp = 2.0F;        // [m]: a dropped kerb (driveway, crossing) ramps down over 1-2 m; cross fall takes 3+ m for curb_min_m
+    const float inv = 1.0F / p.bins_per_sqrt_m;
+    const float sector_rad = 2.0F * std::numbers::pi_v<float> / static_cast<float>(sectors);
+    for (int b = 0; b < bins; ++b) {
+      const float rc = (static_cast<float>(b) + 0.5F) * inv;
+      const float r = rc * rc;
+      if (r > kMaxRingRange) break;
+      ring_.clear();
+      int start = -1;
+      for (int s = 0; s < sectors; ++s) {
+        const auto c = static_cast<std::size_t>(s * bins + b);
+        if (flat_[c] == 0U) continue;
+        if (start < 0 && state_[c] == GroundKind::kRoad) start = static_cast<int>(ring_.size());
+        ring_.push_back(s);
+      }
+      const auto n = static_cast<int>(ring_.size());
+      if (start < 0 || n < 3) continue;
+      const auto bin = [&](int k) { return static_cast<std::size_t>(ring_[static_cast<std::size_t>((start + k) % n)] * bins + b); };
+      int up = -1;  // ring index of the first raised bin, -1: none open
+      float road_z = 0.0F;
+      for (int k = 1; k < n; ++k) {
+        const std::size_t prev = bin(k - 1);
+        const std::size_t cur = bin(k);
+        const int gap = (ring_[static_cast<std::size_t>((start + k) % n)] - ring_[static_cast<std::size_t>((start + k - 1) % n)] + sectors) % sectors;
+        if (static_cast<float>(gap) * sector_rad * r > kMaxGap) {
+          up = -1;  // the ring is broken here: no step can be judged across
+          continue;
+        }
+        const float dz = ground_z_[cur] - ground_z_[prev];
+        if (up < 0) {
+          if (state_[prev] == GroundKind::kRoad && dz >= p.curb_min_m && dz <= kMaxKerb) {
+            up = k;
+            road_z = ground_z_[prev];
+          }
+        } else if (ground_z_[cur] <= road_z + 0.5F * p.curb_min_m) {
+          // Back at road height: a kerb (or a dropped kerb's ramp) when the
+          // ring fell by curb_min_m..kMaxKerb within the last kMaxRamp of arc.
+          float high = -std::numeric_limits<float>::infinity();
+          int arc_sectors = 0;
+          for (int j = k - 1; j >= up; --j) {
+            const int step = (ring_[static_cast<std::size_t>((start + j + 1) % n)] - ring_[static_cast<std::size_t>((start + j) % n)] + sectors) % sectors;
+            arc_sectors += step;
+            if (static_cast<float>(arc_sectors) * sector_rad * r > kMaxRamp) break;
+            high = std::max(high, ground_z_[bin(j)]);
+          }
+          const float drop = high - ground_z_[cur];
+          if (drop >= p.curb_min_m && drop <= kMaxKerb) {
+            for (int j = up; j < k; ++j) {
+              const std::size_t c = bin(j);
+              if (state_[c] == GroundKind::kRoad && ground_z_[c] >= road_z + 0.5F * p.curb_min_m) state_[c] = GroundKind::kSidewalk;
+            }
+          }
+          up = -1;  // closed, or came back down gradually: a slope, not a kerb
+        }
+      }
+    }
+  }
+
   Eigen::Vector3f plane_ = Eigen::Vector3f::Zero();  // local ground plane (c0, cx, cy)
   int sectors_ = 1;
   std::vector<float> zmin_;
@@ -245,6 +344,7 @@ class PolarGround {
   std::vector<GroundKind> state_;
   std::vector<std::uint8_t> flat_;  // 1: the bin passed as ground (flat, reachable)
   std::vector<std::int32_t> bin_of_;
+  std::vector<int> ring_;  // mark_raised_arcs: sectors of one ring's ground bins
 };
 
 }  // namespace semlio::detail
