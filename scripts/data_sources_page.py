@@ -118,7 +118,7 @@ def balm_section(out):
     worst_deg = max(e["median_step_difference_deg"] for _, e in runs)
     worst_ate = max(e["ate_m"] for _, e in runs)
     lost = sum(e["lost"] for _, e in runs)
-    beams = "/".join(str(e["sensor"].get("beams", "?")) for _, e in runs)
+    beams = " / ".join(dict.fromkeys(str(e["sensor"].get("beams", "?")) for _, e in runs))
     summary = [f"| real hand-held OS0-class keyframes ({', '.join(p for p, _ in runs)}) | {beams} beams detected, "
                f"{lost} frames lost, median step difference {worst_cm:.2f} cm / {worst_deg:.3f} deg, "
                f"ATE {worst_ate:.4f} m | no frame lost, 5 cm / 0.5 deg, 0.10 m | "
