@@ -72,6 +72,12 @@ file(WRITE "${script_out}/configs/shipped.yaml" "{}\n")
 file(WRITE "${script_out}/configs/reassociate_2.yaml" "solver: {reassociate_every: 2}\n")
 semlio_add_script_test(frame_time_configs ${CMAKE_COMMAND} -E env ROUNDS=2 ${SEMLIO_BASH} scripts/frame_time_configs.sh
   tests/data/kitti/sequences/00 "${script_out}/configs/shipped.yaml" "${script_out}/configs/reassociate_2.yaml")
+# The data-sources page (issue #37) from the 3-scan KITTI raw drive of
+# tests/data and a 12-frame simulated VLP-16 drive through every container;
+# the page goes to OUT, the README is left alone.
+semlio_add_script_test(data_sources ${CMAKE_COMMAND} -E env SENSORS=vlp16 "PAGE=${script_out}/data_sources/page.md"
+  README= ${SEMLIO_BASH} scripts/data_sources.sh tests/data/kitti_raw/2011_09_26/2011_09_26_drive_0009_sync - 12)
+set_tests_properties(script_data_sources PROPERTIES PASS_REGULAR_EXPRESSION "data_sources.sh: wrote")
 # Lidar-inertial must-holds (issue #7) on 30-frame drives.
 semlio_add_script_test(lio_accuracy ${CMAKE_COMMAND} -E env REPORT_ONLY=1 "OUT_ROOT=${script_out}/lio_accuracy"
   ${SEMLIO_BASH} scripts/lio_accuracy.sh 30 1)
