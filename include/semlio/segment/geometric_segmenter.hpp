@@ -534,6 +534,13 @@ class GeometricSegmenter {
       }
     }
     if (n < static_cast<double>(config_.roughness_min_points)) return 0.0F;
+    return static_cast<float>(minor_axis_sd_m(n, sx, sy, sxx, syy, sxy));
+  }
+
+  // Standard deviation along the minor axis of the horizontal covariance of
+  // n points with sums sx, sy and sums of products sxx, syy, sxy [m]: their
+  // spread across their best-fitting vertical plane.
+  static double minor_axis_sd_m(double n, double sx, double sy, double sxx, double syy, double sxy) {
     const double mx = sx / n;
     const double my = sy / n;
     const double cxx = sxx / n - mx * mx;
@@ -542,7 +549,7 @@ class GeometricSegmenter {
     // Smaller eigenvalue of [[cxx, cxy], [cxy, cyy]].
     const double half_trace = 0.5 * (cxx + cyy);
     const double minor = half_trace - std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
-    return static_cast<float>(std::sqrt(std::max(0.0, minor)));
+    return std::sqrt(std::max(0.0, minor));
   }
 
   // True when most points of the component lie in rough cells (roughness_m
@@ -838,14 +845,7 @@ class GeometricSegmenter {
       if (col_panel_m_[k] == std::numeric_limits<float>::infinity()) continue;
       const double* m = &col_moments_[k * 6];
       if (m[0] < 3.0) continue;
-      const double mx = m[1] / m[0];
-      const double my = m[2] / m[0];
-      const double cxx = m[3] / m[0] - mx * mx;
-      const double cyy = m[4] / m[0] - my * my;
-      const double cxy = m[5] / m[0] - mx * my;
-      const double half_trace = 0.5 * (cxx + cyy);
-      const double minor = half_trace - std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
-      if (std::sqrt(std::max(0.0, minor)) > c.sign_max_roughness_m) continue;
+      if (minor_axis_sd_m(m[0], m[1], m[2], m[3], m[4], m[5]) > c.sign_max_roughness_m) continue;
       g.label = id(Class::kPole);
       g.upper_label = id(Class::kTrafficSign);
       g.split_m = col_panel_m_[k];

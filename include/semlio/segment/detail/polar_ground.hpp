@@ -294,14 +294,16 @@ class PolarGround {
       }
       const auto n = static_cast<int>(ring_.size());
       if (start < 0 || n < 3) continue;
-      const auto bin = [&](int k) { return static_cast<std::size_t>(ring_[static_cast<std::size_t>((start + k) % n)] * bins + b); };
+      // The k-th ground bin of the ring counted from `start`: its sector, its cell.
+      const auto sector = [&](int k) { return ring_[static_cast<std::size_t>((start + k) % n)]; };
+      const auto bin = [&](int k) { return static_cast<std::size_t>(sector(k) * bins + b); };
+      const auto sectors_between = [&](int k0, int k1) { return (sector(k1) - sector(k0) + sectors) % sectors; };
       int up = -1;  // ring index of the first raised bin, -1: none open
       float road_z = 0.0F;
       for (int k = 1; k < n; ++k) {
         const std::size_t prev = bin(k - 1);
         const std::size_t cur = bin(k);
-        const int gap = (ring_[static_cast<std::size_t>((start + k) % n)] - ring_[static_cast<std::size_t>((start + k - 1) % n)] + sectors) % sectors;
-        if (static_cast<float>(gap) * sector_rad * r > kMaxGap) {
+        if (static_cast<float>(sectors_between(k - 1, k)) * sector_rad * r > kMaxGap) {
           up = -1;  // the ring is broken here: no step can be judged across
           continue;
         }
@@ -317,8 +319,7 @@ class PolarGround {
           float high = -std::numeric_limits<float>::infinity();
           int arc_sectors = 0;
           for (int j = k - 1; j >= up; --j) {
-            const int step = (ring_[static_cast<std::size_t>((start + j + 1) % n)] - ring_[static_cast<std::size_t>((start + j) % n)] + sectors) % sectors;
-            arc_sectors += step;
+            arc_sectors += sectors_between(j, j + 1);
             if (static_cast<float>(arc_sectors) * sector_rad * r > kMaxRamp) break;
             high = std::max(high, ground_z_[bin(j)]);
           }
