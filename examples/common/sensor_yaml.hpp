@@ -61,6 +61,7 @@
 
 #include <semlio/core/error.hpp>
 #include <semlio/features/beam_detection.hpp>
+#include <semlio/features/profile_match.hpp>
 #include <semlio/features/sensor_profiles.hpp>
 #include <semlio/imu/preintegration.hpp>
 #include <semlio/lie/se3.hpp>
@@ -371,28 +372,44 @@ inline SensorYaml load_sensor_yaml(const std::string& path) {
 }
 
 /// The sensor profile of a run: the YAML's, or with `profile: auto` the
-/// detected table (plus the YAML's other sensor facts; defaults: 10 Hz, no
-/// range limit beyond the pipeline's, stamp at sweep start, clockwise from
-/// the rear -- Ouster's, the common hand-held case). Throws ConfigError when
-/// neither gives a table, or LIO-SAM's N_SCAN disagrees with the table.
-inline semlio::SensorProfile resolve_sensor(const SensorYaml& y, const semlio::BeamDetection* detection) {
+/// detected table -- with the YAML's other sensor facts when it gives any,
+/// else with the facts of the named profile the table matches
+/// (features/profile_match.hpp: ranges, stamp meaning, spin, and the
+/// profile's angles for beams the first scans did not see), else generic
+/// ones (10 Hz, no range limit beyond the pipeline's, stamp at sweep start,
+/// clockwise from the rear -- Ouster's, the common hand-held case). Throws
+/// ConfigError when neither gives a table, or LIO-SAM's N_SCAN disagrees with
+/// the table. `match` (optional) receives the profile match used.
+inline semlio::SensorProfile resolve_sensor(const SensorYaml& y, const semlio::BeamDetection* detection,
+                                            std::optional<semlio::ProfileMatch>* match = nullptr) {
   semlio::SensorProfile p;
+  if (match != nullptr) match->reset();
   if (y.detect) {
     if (detection == nullptr || detection->beams() == 0) {
       throw semlio::ConfigError("sensor.profile: auto needs a beam detection, and none found beams");
     }
+    // Uniform fallback bands are no beam table: they match no sensor.
+    const std::optional<semlio::ProfileMatch> m =
+        !y.sensor && detection->separable ? semlio::match_sensor_profile(detection->elevations_rad) : std::nullopt;
     if (y.sensor) {
       p = *y.sensor;
+      p.beams = detection->sensor_model(p.beams.rotation_rate_hz);
+      p.name = "detected-" + std::to_string(detection->beams());
+      p.nominal_table = false;
+    } else if (m) {
+      p = semlio::sensor_profile(m->profile);
+      p.beams = m->completed_table(p.beams, detection->elevations_rad);
+      p.nominal_table = m->matched < m->profile_beams;  // unseen beams keep the datasheet's angles
+      if (match != nullptr) *match = m;
     } else {
       p.header_stamp = semlio::StampMeaning::kSweepStart;
       p.sweep_start_azimuth_rad = std::numbers::pi;
       p.min_range_m = 0.0;
       p.max_range_m = 1000.0;
+      p.beams = detection->sensor_model(p.beams.rotation_rate_hz);
+      p.name = "detected-" + std::to_string(detection->beams());
+      p.nominal_table = false;
     }
-    const double rate = p.beams.rotation_rate_hz;
-    p.beams = detection->sensor_model(rate);
-    p.name = "detected-" + std::to_string(detection->beams());
-    p.nominal_table = false;
   } else if (y.sensor && !y.sensor->beams.elevations_rad.empty()) {
     p = *y.sensor;
   } else {
@@ -409,7 +426,8 @@ inline semlio::SensorProfile resolve_sensor(const SensorYaml& y, const semlio::B
 /// Facts for a tool's summary and report.json "sensor" object.
 inline std::vector<std::pair<std::string, std::string>> sensor_facts(const semlio::SensorProfile& p,
                                                                      const semlio::MotionProfile& m,
-                                                                     const semlio::BeamDetection* d) {
+                                                                     const semlio::BeamDetection* d,
+                                                                     const semlio::ProfileMatch* match = nullptr) {
   const auto deg = [](double rad) { return std::to_string(rad * 180.0 / std::numbers::pi); };
   std::vector<std::pair<std::string, std::string>> f = {
       {"profile", p.name},
@@ -427,6 +445,12 @@ inline std::vector<std::pair<std::string, std::string>> sensor_facts(const semli
     f.emplace_back("detection_rms_deg", deg(d->rms_residual_rad));
     f.emplace_back("detection_note", d->note);
   }
+  if (match != nullptr) {
+    f.emplace_back("matched_profile", match->profile);
+    f.emplace_back("matched_beams", std::to_string(match->matched) + " of " + std::to_string(match->profile_beams));
+    f.emplace_back("match_rms_deg", deg(match->rms_rad));
+    f.emplace_back("match_max_deg", deg(match->max_rad));
+  }
   return f;
 }
 
@@ -435,6 +459,7 @@ struct SensorSetup {
   semlio::SensorProfile profile;                  ///< the sensor the run uses
   semlio::MotionProfile motion;                   ///< the platform
   std::optional<semlio::BeamDetection> detection; ///< when profile: auto
+  std::optional<semlio::ProfileMatch> match;      ///< the named profile the detected table matched
   std::vector<std::pair<std::string, std::string>> facts;  ///< sensor_facts(), for the summary and report.json
 };
 
@@ -456,10 +481,10 @@ SensorSetup configure_sensor(const SensorYaml& y, std::size_t frames, ReadScan&&
     out.detection = detector.detect();
   }
   const semlio::BeamDetection* d = out.detection ? &*out.detection : nullptr;
-  out.profile = resolve_sensor(y, d);
+  out.profile = resolve_sensor(y, d, &out.match);
   out.motion = y.motion;
   settings = semlio::settings_for_sensor(out.profile, out.motion, settings);
-  out.facts = sensor_facts(out.profile, out.motion, d);
+  out.facts = sensor_facts(out.profile, out.motion, d, out.match ? &*out.match : nullptr);
   return out;
 }
 

@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "frame_source.hpp"
@@ -34,24 +35,31 @@ void apply_profile(const semlio::SensorProfile& profile, semlio_examples::FrameS
 }
 
 // The sensor of a run (--sensor, --platform): a named profile, a sensor YAML,
-// or auto -- KITTI scans keep the HDL-64E point-order rings; any other input
-// gets the beam table detected from its first scans (from the cloud's ring
-// field when it has one). Applied on top of the presets' settings, before
-// the user's --config.
+// or auto -- KITTI's HDL-64E scans (recognised by their point order) keep
+// their point-order rings and KITTI's vertical correction, in a KITTI folder
+// as in a bag; any other input gets the beam table detected from its first
+// scans (from the cloud's ring field when it has one), with the facts of the
+// named profile that table matches (features/profile_match.hpp). Applied on
+// top of the presets' settings, before the user's --config.
 void decide_sensor(const std::string& sensor, const std::string& platform, semlio_examples::FrameSource& source,
                    semlio_examples::RunContext& ctx) {
   semlio_examples::SensorYaml y;
+  std::string decided_by = "--sensor " + sensor;
+  bool kitti_layout = false;
+  std::optional<semlio::BeamDetection> detection;
   if (is_yaml_file(sensor)) {
     y = semlio_examples::load_sensor_yaml(sensor);
   } else if (sensor == "auto") {
-    // KITTI's HDL-64E .bin scans keep the rings of their point order (and
-    // KITTI's vertical correction) when the detection confirms 64 rings in
-    // that order; any other data -- KITTI-layout folders of other sensors
-    // included -- gets the detected table.
     const std::vector<semlio::Scan> scans = source.first_scans(3);
     if (scans.empty()) throw semlio::FormatError(source.facts().path + ": no readable scan to detect the beams from");
     const semlio::BeamDetection d = semlio::detect_beams(scans);
-    if (source.kitti_scans() && d.source == semlio::BeamSource::kPointOrder && d.beams() == 64) {
+    // 64 rings stored one after the other whose elevations do not separate:
+    // KITTI's calibrated .bin layout (beam_detection.hpp). From a KITTI
+    // folder that is enough; from a bag or a scan folder the rings' elevations
+    // must also lie where the HDL-64E's do (a converter such as kitti2bag
+    // keeps the point order).
+    const bool point_order_64 = d.source == semlio::BeamSource::kPointOrder && d.beams() == 64;
+    if (point_order_64 && source.kitti_scans()) {
       ctx.sensor_facts = {{"profile", "hdl64e"},
                           {"decided_by", "auto: KITTI HDL-64E scans, rings from point order"},
                           {"detection", d.note}};
@@ -61,31 +69,46 @@ void decide_sensor(const std::string& sensor, const std::string& platform, semli
       }
       return;
     }
-    ctx.settings.odometry.kitti_vertical_correction = false;
-    y.detect = true;
-    if (!platform.empty()) y.motion = semlio::motion_profile(platform);
-    const semlio::SensorProfile profile = semlio_examples::resolve_sensor(y, &d);
-    ctx.settings = semlio::settings_for_sensor(profile, y.motion, ctx.settings);
-    ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, &d);
-    ctx.sensor_facts.emplace_back("decided_by", "auto: beams detected from the first scans");
-    apply_profile(profile, source, ctx);
-    return;
+    const std::optional<semlio::ProfileMatch> kitti =
+        point_order_64 ? semlio::match_sensor_profile(d.elevations_rad) : std::nullopt;
+    if (kitti && kitti->profile == "hdl64e") {
+      // A bag of KITTI scans: what `--sensor hdl64e --kitti-correction on` does.
+      y.sensor = semlio::sensor_profile("hdl64e");
+      kitti_layout = true;
+      detection = d;
+      decided_by = "auto: KITTI HDL-64E scans (rings from point order, KITTI's vertical correction)";
+    } else {
+      ctx.settings.odometry.kitti_vertical_correction = false;
+      y.detect = true;
+      if (!platform.empty()) y.motion = semlio::motion_profile(platform);
+      std::optional<semlio::ProfileMatch> match;
+      const semlio::SensorProfile profile = semlio_examples::resolve_sensor(y, &d, &match);
+      ctx.settings = semlio::settings_for_sensor(profile, y.motion, ctx.settings);
+      ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, &d, match ? &*match : nullptr);
+      ctx.sensor_facts.emplace_back("decided_by", match ? "auto: beams detected from the first scans, matched to " +
+                                                              match->profile
+                                                        : std::string("auto: beams detected from the first scans"));
+      apply_profile(profile, source, ctx);
+      return;
+    }
   } else {
     y.sensor = semlio::sensor_profile(sensor);
   }
   if (!platform.empty()) y.motion = semlio::motion_profile(platform);
-  std::optional<semlio::BeamDetection> detection;
   if (y.detect) {  // a sensor YAML with profile: auto
     const std::vector<semlio::Scan> scans = source.first_scans(3);
     if (scans.empty()) throw semlio::FormatError(source.facts().path + ": no readable scan to detect the beams from");
     detection = semlio::detect_beams(scans);
   }
-  const semlio::SensorProfile profile = semlio_examples::resolve_sensor(y, detection ? &*detection : nullptr);
-  const bool kitti_correction = ctx.settings.odometry.kitti_vertical_correction;
+  std::optional<semlio::ProfileMatch> match;
+  const semlio::SensorProfile profile =
+      semlio_examples::resolve_sensor(y, detection ? &*detection : nullptr, &match);
+  const bool kitti_correction = kitti_layout || ctx.settings.odometry.kitti_vertical_correction;
   ctx.settings = semlio::settings_for_sensor(profile, y.motion, ctx.settings);
   ctx.settings.odometry.kitti_vertical_correction = kitti_correction;
-  ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, detection ? &*detection : nullptr);
-  ctx.sensor_facts.emplace_back("decided_by", "--sensor " + sensor);
+  ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, detection ? &*detection : nullptr,
+                                                   match ? &*match : nullptr);
+  ctx.sensor_facts.emplace_back("decided_by", decided_by);
   apply_profile(profile, source, ctx);
   if (y.T_imu_lidar) ctx.T_imu_lidar = y.T_imu_lidar;
   y.apply_imu(ctx.lc.imu);

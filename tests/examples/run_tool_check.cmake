@@ -9,7 +9,10 @@
 #  5. --last -5 is a usage error; 6. a deleted scan is one "missing" frame;
 #  7. the KITTI raw drive as published runs and is evaluated against OXTS;
 #  8. a bag with several PointCloud2 topics names them;
-#  9. header stamps mean what the sensor profile says (sweep end or start).
+#  9. header stamps mean what the sensor profile says (sweep end or start);
+# 10. --sensor auto recognises KITTI scans in a bag and an MCAP file (point
+#     order, the HDL-64E's elevations): the poses of --sensor hdl64e
+#     --kitti-correction on, and report.json says how it was decided.
 # Variables: SEMLIO_RUN, SEMLIO_CONVERT (binaries), DATA_DIR (tests/data), WORK_DIR.
 cmake_minimum_required(VERSION 3.21)  # policies: quoted strings in if() are never variables
 file(REMOVE_RECURSE "${WORK_DIR}")
@@ -60,6 +63,28 @@ foreach(other mcap kitti folder)
     message(FATAL_ERROR "poses.txt from ${other} differs from the ROS 1 bag's:\n${poses_other}\nvs\n${poses_bag}")
   endif()
 endforeach()
+# 10. --sensor auto on the same bags.
+set(auto_opts --labels none --preset full --sensor auto --map off --quiet)
+foreach(container bag mcap)
+  if(container STREQUAL "bag")
+    set(file "${DATA_DIR}/bags/kitti3_lz4.bag")
+  else()
+    set(file "${DATA_DIR}/bags/kitti3_zstd.mcap")
+  endif()
+  run_ok(auto_${container} --input "${file}" --out "${WORK_DIR}/auto_${container}" ${auto_opts})
+  file(READ "${WORK_DIR}/auto_${container}/poses.txt" poses_auto)
+  if(NOT poses_auto STREQUAL poses_bag)
+    message(FATAL_ERROR "--sensor auto on the ${container}: poses differ from --sensor hdl64e --kitti-correction on:\n"
+                        "${poses_auto}\nvs\n${poses_bag}")
+  endif()
+  file(READ "${WORK_DIR}/auto_${container}/report.json" report)
+  string(JSON profile GET "${report}" sensor profile)
+  string(JSON decided GET "${report}" sensor decided_by)
+  if(NOT profile STREQUAL "hdl64e" OR NOT decided MATCHES "KITTI HDL-64E")
+    message(FATAL_ERROR "--sensor auto on the ${container}: profile '${profile}', decided_by '${decided}'")
+  endif()
+endforeach()
+
 file(READ "${WORK_DIR}/out_mcap/report.json" report)
 string(JSON fmt GET "${report}" input format)
 string(JSON status GET "${report}" status)

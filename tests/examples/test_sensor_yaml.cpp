@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include <semlio/core/error.hpp>
+#include <semlio/features/profile_match.hpp>
 
 #include "sensor_yaml.hpp"
 
@@ -161,6 +163,40 @@ TEST_CASE("sensor YAML: profile auto takes the detected table", "[examples]") {
   CHECK_THROWS_AS(semlio_examples::resolve_sensor(y, nullptr), semlio::ConfigError);
   const auto facts = semlio_examples::sensor_facts(p, y.motion, &d);
   CHECK(facts.front() == std::pair<std::string, std::string>{"profile", "detected-4"});
+}
+
+TEST_CASE("sensor YAML: profile auto takes the facts of the named profile the detected table matches",
+          "[examples]") {
+  const auto y = parse("sensor:\n  profile: auto\n");
+  REQUIRE_FALSE(y.sensor);
+  // The lower 25 beams of an OS1-32 (the upper ones saw sky), one a little off.
+  const semlio::SensorModel os1 = semlio::sensor_profile("os1-32").beams;
+  semlio::BeamDetection d;
+  d.elevations_rad.assign(os1.elevations_rad.begin(), os1.elevations_rad.begin() + 25);
+  d.elevations_rad[3] += 0.05 * kDeg;
+  d.separable = true;
+  d.source = semlio::BeamSource::kElevation;
+  std::optional<semlio::ProfileMatch> match;
+  const semlio::SensorProfile p = semlio_examples::resolve_sensor(y, &d, &match);
+  REQUIRE(match);
+  CHECK(p.name == "os1-32");
+  REQUIRE(p.beams.beams() == 32);
+  CHECK(p.beams.elevations_rad[3] == d.elevations_rad[3]);
+  CHECK(p.beams.elevations_rad[31] == os1.elevations_rad[31]);
+  CHECK(p.header_stamp == semlio::StampMeaning::kSweepStart);
+  CHECK(p.max_range_m == semlio::sensor_profile("os1-32").max_range_m);
+  CHECK(p.nominal_table);  // seven beams keep the datasheet's angles
+  const auto facts = semlio_examples::sensor_facts(p, y.motion, &d, &*match);
+  CHECK(std::find(facts.begin(), facts.end(), std::pair<std::string, std::string>{"matched_beams", "25 of 32"}) !=
+        facts.end());
+  // Uniform fallback bands are no sensor's table, even when they happen to fit one.
+  semlio::BeamDetection bands = d;
+  bands.separable = false;
+  bands.source = semlio::BeamSource::kUniformFallback;
+  const semlio::SensorProfile generic = semlio_examples::resolve_sensor(y, &bands, &match);
+  CHECK_FALSE(match);
+  CHECK(generic.name == "detected-25");
+  CHECK(generic.max_range_m == 1000.0);
 }
 
 TEST_CASE("sensor YAML: configure_sensor detects, resolves and applies the settings", "[examples]") {

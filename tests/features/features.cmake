@@ -7,6 +7,7 @@ set(SEMLIO_TESTS_features_features
   features/test_loam_features.cpp
   features/test_sensor_profiles.cpp
   features/test_beam_detection.cpp
+  features/test_profile_match.cpp
   search/test_kdtree.cpp
   search/test_k_best.cpp
   search/test_voxel_grid.cpp)
