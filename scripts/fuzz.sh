@@ -21,7 +21,10 @@
 # Environment: SEMLIO_FUZZ_BUILD_DIR (default ${TMPDIR:-/tmp}/semlio_build_fuzz),
 #              JOBS (build parallelism, default 1), WORKERS (fuzzing
 #              processes per harness, default nproc), SKIP_BUILD=1 (use the
-#              executable already built there, or FUZZ_BIN when set).
+#              executable already built there, or FUZZ_BIN when set),
+#              SUMMARY (a TSV file to write: harness, seconds, workers,
+#              executions, exec/s, new findings; scripts/robustness.sh
+#              makes docs/robustness.md from it).
 # Exit status: 0 when no harness found anything, 1 otherwise.
 set -euo pipefail
 
@@ -55,6 +58,7 @@ fi
 
 found=0
 summary=()
+[ -z "${SUMMARY:-}" ] || printf 'harness\tseconds\tworkers\texecutions\texec_per_s\tfindings\n' > "$SUMMARY"
 for h in "${harnesses[@]}"; do
   seeds="$root/tests/fuzz/corpus/$h"
   crashes="$root/tests/fuzz/crashes/$h"
@@ -91,6 +95,7 @@ for h in "${harnesses[@]}"; do
     cat "$build"/fuzz_"$h".*.log | grep -m3 -E 'ERROR: |runtime error|SUMMARY' | sed 's/^/   /' || true
   fi
   summary+=("$(printf '%-18s %10s execs %8s exec/s %4s findings' "$h" "${execs:-?}" "${rate:-?}" "$new")")
+  [ -z "${SUMMARY:-}" ] || printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$h" "$seconds" "$workers" "$execs" "$rate" "$new" >> "$SUMMARY"
 done
 echo
 echo "fuzz.sh: ${seconds} s per harness, $workers worker(s) each"
