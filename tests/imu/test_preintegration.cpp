@@ -328,7 +328,8 @@ TEST_CASE("preintegration rejects bad IMU input with ValueError", "[imu]") {
 TEST_CASE("ImuBuffer keeps time order and extracts covering ranges", "[imu]") {
   semlio::ImuBuffer buf;
   for (int k = 0; k < 10; ++k) buf.push(ImuSample{0.1 * k, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()});
-  CHECK_THROWS_WITH(buf.push(ImuSample{0.85, {}, {}}), Catch::Contains("backwards"));
+  CHECK_THROWS_WITH(buf.push(ImuSample{0.85, Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}),
+                    Catch::Contains("backwards"));
   CHECK(buf.size() == 10);
   const auto span = buf.covering(0.25, 0.55, 0.2);
   REQUIRE(span.size() == 5);  // 0.2 .. 0.6
