@@ -99,9 +99,9 @@ def balm_section(out):
         "the same data, not ground truth. Beam table detected and reported, no frame lost or rejected, median "
         "keyframe-to-keyframe difference to the reference within 5 cm / 0.5 deg, ATE at most 0.10 m.",
         "",
-        "| preset | beams found | how | points on a beam | frames tracked | median step difference | "
+        "| preset | beams found | how | profile matched | points on a beam | frames tracked | median step difference | "
         "largest step difference | ATE [m] | holds |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for preset, e in runs:
         s = e["sensor"]
@@ -109,7 +109,8 @@ def balm_section(out):
         fit = s.get("detection_fit_fraction")
         fit_text = f"{float(fit) * 100:.1f} %" if fit is not None else "-"
         page.append(
-            f"| {preset} | {s.get('beams', '?')} | {s.get('detection', '?')} | {fit_text} | "
+            f"| {preset} | {s.get('beams', '?')} | {s.get('detection', '?')} | "
+            f"{s.get('matched_profile', 'none')} ({s.get('matched_beams', '-')} beams) | {fit_text} | "
             f"{tracked} of {e['keyframes']} | "
             f"{e['median_step_difference_m'] * 100:.2f} cm / {e['median_step_difference_deg']:.3f} deg | "
             f"{e['max_step_difference_m'] * 100:.2f} cm / {e['max_step_difference_deg']:.3f} deg | "
@@ -119,7 +120,9 @@ def balm_section(out):
     worst_ate = max(e["ate_m"] for _, e in runs)
     lost = sum(e["lost"] for _, e in runs)
     beams = " / ".join(dict.fromkeys(str(e["sensor"].get("beams", "?")) for _, e in runs))
-    summary = [f"| real hand-held OS0-class keyframes ({', '.join(p for p, _ in runs)}) | {beams} beams detected, "
+    matched = " / ".join(dict.fromkeys(str(e["sensor"].get("matched_profile", "no profile")) for _, e in runs))
+    summary = [f"| real hand-held OS0-class keyframes ({', '.join(p for p, _ in runs)}) | {beams} beams detected "
+               f"({matched}), "
                f"{lost} frames lost, median step difference {worst_cm:.2f} cm / {worst_deg:.3f} deg, "
                f"ATE {worst_ate:.4f} m | no frame lost, 5 cm / 0.5 deg, 0.10 m | "
                f"{verdict(all(e['pass'] for _, e in runs))} |"]
@@ -141,12 +144,12 @@ def sensors_section(out):
         "then inferred); `semlio_run --sensor auto` reads each. KITTI t_err at most 1.0 % for the VLP-16, "
         "0.5 % for the OS1-64 and OS0-128.",
         "",
-        "| sensor | input | frames | t_err [%] | r_err [deg/100 m] | bound [%] | beam table (from) | holds |",
+        "| sensor | input | frames | t_err [%] | r_err [deg/100 m] | bound [%] | profile (beam table from) | holds |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for sensor, inp, n, t, r, bound, ok, profile, how in rows:
         page.append(f"| {SENSOR_NAMES.get(sensor, sensor)} | {INPUT_NAMES.get(inp, inp)} | {n} | {t} | {r} | "
-                    f"{bound} | {profile.replace('detected-', '')} beams, {BEAM_SOURCES.get(how, how)} | {verdict(ok == 'PASS')} |")
+                    f"{bound} | {profile} ({BEAM_SOURCES.get(how, how)}) | {verdict(ok == 'PASS')} |")
     summary = []
     for sensor in dict.fromkeys(r[0] for r in rows):
         sel = [r for r in rows if r[0] == sensor]
