@@ -36,12 +36,14 @@ OUT=${OUT:-results/batch}
 JOBS=${JOBS:-$(nproc)}
 
 if [[ -z "${SKIP_BUILD:-}" ]]; then
-  scripts/install_deps.sh parallel
+  scripts/install_deps.sh
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
   # semlio_run where the tree has it, semlio_kitti always.
   cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_run 2> /dev/null ||
     cmake --build "$BUILD_DIR" -j "$(nproc)" --target semlio_kitti
 fi
+# GNU parallel also with SKIP_BUILD (CTest's run): a fresh machine lacks it.
+command -v parallel > /dev/null || scripts/install_deps.sh parallel > /dev/null
 command -v parallel > /dev/null || { echo "batch.sh: GNU parallel is missing (apt-get install parallel)" >&2; exit 1; }
 
 TOOL=${TOOL:-}
