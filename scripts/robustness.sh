@@ -12,6 +12,7 @@
 # sanitized build and suite); not part of CI. Either half can be reused:
 #   FUZZ_SUMMARY=FILE   a SUMMARY TSV of an earlier scripts/fuzz.sh run (no fuzzing)
 #   SANITIZE_LOG=FILE   the output of an earlier scripts/sanitize.sh address run
+#                       (BUILD_DIR: its build folder, which names the compiler)
 # Environment: OUT (results/robustness), PAGE (docs/robustness.md), README
 # (README.md; - leaves it alone), and what fuzz.sh and sanitize.sh read
 # (WORKERS, JOBS, BUILD_DIR, CC/CXX, ...).
@@ -30,14 +31,14 @@ if [[ -z "$fuzz_summary" ]]; then
   SUMMARY="$fuzz_summary" scripts/fuzz.sh "$SECONDS_PER_HARNESS" | tee "$OUT/fuzz.log" || true
 fi
 sanitize_log=${SANITIZE_LOG:-}
+sanitize_build=${BUILD_DIR:-build-sanitize-address}
 if [[ -z "$sanitize_log" ]]; then
   sanitize_log="$OUT/sanitize.log"
   # clang by default: its front end builds the sanitized suite several times
   # faster than GCC's (the pipelines' headers), and fuzz.sh installed it.
-  CC=${CC:-clang} CXX=${CXX:-clang++} BUILD_DIR=${BUILD_DIR:-build-sanitize-address} \
-    scripts/sanitize.sh address > "$sanitize_log" 2>&1 || true
+  CC=${CC:-clang} CXX=${CXX:-clang++} BUILD_DIR=$sanitize_build scripts/sanitize.sh address > "$sanitize_log" 2>&1 || true
   tail -n 5 "$sanitize_log"
 fi
 /usr/bin/python3 scripts/robustness_page.py --fuzz "$fuzz_summary" --sanitize "$sanitize_log" \
-  --page "$PAGE" --readme "$README"
+  --sanitize-build "$sanitize_build" --page "$PAGE" --readme "$README"
 echo "robustness.sh: wrote $PAGE"

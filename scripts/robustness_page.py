@@ -3,11 +3,13 @@
 scripts/fuzz.sh SUMMARY file and the output of scripts/sanitize.sh address
 (scripts/robustness.sh runs all three).
 
-Usage: robustness_page.py --fuzz TSV --sanitize LOG --page PAGE --readme README
-  README "-" leaves the README alone."""
+Usage: robustness_page.py --fuzz TSV --sanitize LOG [--sanitize-build DIR] --page PAGE --readme README
+  README "-" leaves the README alone; DIR (the sanitized build folder) names
+  the compiler when the log does not."""
 import argparse
 import os
 import re
+import subprocess
 import sys
 
 MIN_EXECUTIONS = 1_000_000
@@ -45,7 +47,8 @@ def read_sanitize(path):
          "failed_tests": [], "reports": 0}
     m = re.search(r"building with -fsanitize=(\S+)", text)
     s["flags"] = m.group(1) if m else None
-    m = re.search(r"The CXX compiler identification is (.+)", text)
+    m = re.search(r"sanitize.sh: compiler \S+ \((.+)\)", text) or \
+        re.search(r"The CXX compiler identification is (.+)", text)
     s["compiler"] = m.group(1).strip() if m else None
     m = re.search(r"(\d+)% tests passed, (\d+) tests? failed out of (\d+)", text)
     if m:
@@ -72,11 +75,19 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--fuzz", required=True)
     ap.add_argument("--sanitize", required=True)
+    ap.add_argument("--sanitize-build", default="")
     ap.add_argument("--page", required=True)
     ap.add_argument("--readme", required=True)
     a = ap.parse_args()
     fuzz = read_fuzz(a.fuzz)
     san = read_sanitize(a.sanitize)
+    cache = os.path.join(a.sanitize_build, "CMakeCache.txt")
+    if san["compiler"] is None and a.sanitize_build and os.path.exists(cache):
+        with open(cache) as f:
+            cxx = next((line.split("=", 1)[1].strip() for line in f if line.startswith("CMAKE_CXX_COMPILER:")), "")
+        if cxx:
+            version = subprocess.run([cxx, "--version"], capture_output=True, text=True).stdout.splitlines()
+            san["compiler"] = version[0] if version else cxx
     if san["total"] is None:
         sys.exit(f"{a.sanitize}: no CTest summary (did scripts/sanitize.sh address finish?)")
 
@@ -127,7 +138,7 @@ def main():
         "",
         "## The test suite under sanitizers",
         "",
-        f"`scripts/sanitize.sh address`: {san['compiler'] or 'the default compiler'}, "
+        f"`scripts/sanitize.sh address`: {san['compiler'] or 'compiler not named in the log'}, "
         f"`-fsanitize={san['flags'] or '?'}`, `-O1 -g`, every CTest entry (ASan with leak detection; any "
         f"report stops the test and fails it). {san['passed']} of {san['total']} tests passed in {minutes}; "
         f"{san['reports']} sanitizer reports.",

@@ -40,6 +40,9 @@ scripts/install_deps.sh
 # pipelines' tests fast enough.
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-O1 -g" -DSEMLIO_SANITIZE="$SANITIZE" \
   -DSEMLIO_BUILD_BENCHMARKS=OFF -DSEMLIO_WARNINGS_AS_ERRORS=OFF
+# Which compiler the build dir holds (the configure step names it only the first time).
+echo "sanitize.sh: compiler $(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$BUILD_DIR/CMakeCache.txt")" \
+  "($("$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$BUILD_DIR/CMakeCache.txt")" --version | head -n 1))"
 if [ "$MODE" = address ]; then
   cmake --build "$BUILD_DIR" -j "$JOBS"
   # detect_leaks: a leak is a failure too. halt_on_error: the first report
