@@ -8,9 +8,15 @@
 #
 #   scripts/robustness.sh [SECONDS_PER_HARNESS]   (default 300: the must-hold)
 #
+# With INTERRUPT_SCANS=DIR (real scans, e.g. the 22-scan KITTI raw snippet of
+# the shared data) it also runs scripts/interrupt_check.sh DIR 10 with the
+# tools of TOOLS_BUILD_DIR (build): SIGINT after 10 frames leaves complete
+# outputs for those frames, and OUT is guarded.
+#
 # Takes hours on a 2-core machine (the fuzzing: 23 harnesses x SECONDS; the
 # sanitized build and suite); not part of CI. Either half can be reused:
 #   FUZZ_SUMMARY=FILE   a SUMMARY TSV of an earlier scripts/fuzz.sh run (no fuzzing)
+#   INTERRUPT_LOG=FILE  the output of an earlier scripts/interrupt_check.sh run
 #   SANITIZE_LOG=FILE   the output of an earlier scripts/sanitize.sh address run
 #                       (BUILD_DIR: its build folder, which names the compiler)
 # Environment: OUT (results/robustness), PAGE (docs/robustness.md), README
@@ -39,6 +45,12 @@ if [[ -z "$sanitize_log" ]]; then
   CC=${CC:-clang} CXX=${CXX:-clang++} BUILD_DIR=$sanitize_build scripts/sanitize.sh address > "$sanitize_log" 2>&1 || true
   tail -n 5 "$sanitize_log"
 fi
-/usr/bin/python3 scripts/robustness_page.py --fuzz "$fuzz_summary" --sanitize "$sanitize_log" \
+interrupt_log=${INTERRUPT_LOG:-}
+if [[ -z "$interrupt_log" && -n "${INTERRUPT_SCANS:-}" ]]; then
+  interrupt_log="$OUT/interrupt.log"
+  BUILD_DIR=${TOOLS_BUILD_DIR:-build} OUT="$OUT/interrupt" scripts/interrupt_check.sh "$INTERRUPT_SCANS" 10 \
+    | tee "$interrupt_log" || true
+fi
+/usr/bin/python3 scripts/robustness_page.py ${interrupt_log:+--interrupt "$interrupt_log"} --fuzz "$fuzz_summary" --sanitize "$sanitize_log" \
   --sanitize-build "$sanitize_build" --page "$PAGE" --readme "$README"
 echo "robustness.sh: wrote $PAGE"
