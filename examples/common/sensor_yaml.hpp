@@ -388,14 +388,11 @@ inline semlio::SensorProfile resolve_sensor(const SensorYaml& y, const semlio::B
     if (detection == nullptr || detection->beams() == 0) {
       throw semlio::ConfigError("sensor.profile: auto needs a beam detection, and none found beams");
     }
-    // Uniform fallback bands are no beam table: they match no sensor.
+    // The YAML's own facts win; uniform fallback bands are no beam table and match no sensor.
     const std::optional<semlio::ProfileMatch> m =
         !y.sensor && detection->separable ? semlio::match_sensor_profile(detection->elevations_rad) : std::nullopt;
     if (y.sensor) {
       p = *y.sensor;
-      p.beams = detection->sensor_model(p.beams.rotation_rate_hz);
-      p.name = "detected-" + std::to_string(detection->beams());
-      p.nominal_table = false;
     } else if (m) {
       p = semlio::sensor_profile(m->profile);
       p.beams = m->completed_table(p.beams, detection->elevations_rad);
@@ -406,6 +403,8 @@ inline semlio::SensorProfile resolve_sensor(const SensorYaml& y, const semlio::B
       p.sweep_start_azimuth_rad = std::numbers::pi;
       p.min_range_m = 0.0;
       p.max_range_m = 1000.0;
+    }
+    if (!m) {
       p.beams = detection->sensor_model(p.beams.rotation_rate_hz);
       p.name = "detected-" + std::to_string(detection->beams());
       p.nominal_table = false;

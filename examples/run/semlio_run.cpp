@@ -47,12 +47,15 @@ void decide_sensor(const std::string& sensor, const std::string& platform, semli
   std::string decided_by = "--sensor " + sensor;
   bool kitti_layout = false;
   std::optional<semlio::BeamDetection> detection;
+  const auto detect_first_scans = [&source] {
+    const std::vector<semlio::Scan> scans = source.first_scans(3);
+    if (scans.empty()) throw semlio::FormatError(source.facts().path + ": no readable scan to detect the beams from");
+    return semlio::detect_beams(scans);
+  };
   if (is_yaml_file(sensor)) {
     y = semlio_examples::load_sensor_yaml(sensor);
   } else if (sensor == "auto") {
-    const std::vector<semlio::Scan> scans = source.first_scans(3);
-    if (scans.empty()) throw semlio::FormatError(source.facts().path + ": no readable scan to detect the beams from");
-    const semlio::BeamDetection d = semlio::detect_beams(scans);
+    const semlio::BeamDetection d = detect_first_scans();
     // 64 rings stored one after the other whose elevations do not separate:
     // KITTI's calibrated .bin layout (beam_detection.hpp). From a KITTI
     // folder that is enough; from a bag or a scan folder the rings' elevations
@@ -78,28 +81,17 @@ void decide_sensor(const std::string& sensor, const std::string& platform, semli
       detection = d;
       decided_by = "auto: KITTI HDL-64E scans (rings from point order, KITTI's vertical correction)";
     } else {
+      // Any other data: the detected table, through the common path below.
       ctx.settings.odometry.kitti_vertical_correction = false;
       y.detect = true;
-      if (!platform.empty()) y.motion = semlio::motion_profile(platform);
-      std::optional<semlio::ProfileMatch> match;
-      const semlio::SensorProfile profile = semlio_examples::resolve_sensor(y, &d, &match);
-      ctx.settings = semlio::settings_for_sensor(profile, y.motion, ctx.settings);
-      ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, &d, match ? &*match : nullptr);
-      ctx.sensor_facts.emplace_back("decided_by", match ? "auto: beams detected from the first scans, matched to " +
-                                                              match->profile
-                                                        : std::string("auto: beams detected from the first scans"));
-      apply_profile(profile, source, ctx);
-      return;
+      detection = d;
+      decided_by = "auto: beams detected from the first scans";
     }
   } else {
     y.sensor = semlio::sensor_profile(sensor);
   }
   if (!platform.empty()) y.motion = semlio::motion_profile(platform);
-  if (y.detect) {  // a sensor YAML with profile: auto
-    const std::vector<semlio::Scan> scans = source.first_scans(3);
-    if (scans.empty()) throw semlio::FormatError(source.facts().path + ": no readable scan to detect the beams from");
-    detection = semlio::detect_beams(scans);
-  }
+  if (y.detect && !detection) detection = detect_first_scans();  // a sensor YAML with profile: auto
   std::optional<semlio::ProfileMatch> match;
   const semlio::SensorProfile profile =
       semlio_examples::resolve_sensor(y, detection ? &*detection : nullptr, &match);
@@ -108,6 +100,7 @@ void decide_sensor(const std::string& sensor, const std::string& platform, semli
   ctx.settings.odometry.kitti_vertical_correction = kitti_correction;
   ctx.sensor_facts = semlio_examples::sensor_facts(profile, y.motion, detection ? &*detection : nullptr,
                                                    match ? &*match : nullptr);
+  if (match) decided_by += ", matched to " + match->profile;
   ctx.sensor_facts.emplace_back("decided_by", decided_by);
   apply_profile(profile, source, ctx);
   if (y.T_imu_lidar) ctx.T_imu_lidar = y.T_imu_lidar;
