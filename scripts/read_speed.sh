@@ -15,7 +15,9 @@
 #   1. bench_bag_read (BM_Ros1BagReadDecode/1) and bench_mcap_read
 #      (BM_McapReadDecode/crc:1): next() -- file read, decompression, copy --
 #      then PointCloud2 -> Scan, per scan, over the three real KITTI raw scans
-#      of tests/data/bags (about 118 000 points each);
+#      of tests/data/bags (about 118 000 points each); and the same scans as
+#      rosbag2's MCAP storage writes them with each preset
+#      (BM_McapReadDecodeRosbag2/default|zstd_fast|zstd_small);
 #   2. bench_frame_time: the odometry's thread CPU time per frame on the real
 #      drive (scans read before the clock starts), baseline and full preset,
 #      median over the frames after the first of each of REPEAT passes;
@@ -57,6 +59,10 @@ taskset -c "$CORE" "$BUILD_DIR/bench/bench_bag_read" --benchmark_filter='BM_Ros1
   --benchmark_min_time=2 --benchmark_format=json > "$OUT/bag.json" 2> /dev/null
 taskset -c "$CORE" "$BUILD_DIR/bench/bench_mcap_read" --benchmark_filter='BM_McapReadDecode/crc:1$' \
   --benchmark_min_time=2 --benchmark_format=json > "$OUT/mcap.json" 2> /dev/null
+for preset in default zstd_fast zstd_small; do
+  taskset -c "$CORE" "$BUILD_DIR/bench/bench_mcap_read" --benchmark_filter="BM_McapReadDecodeRosbag2/$preset\$" \
+    --benchmark_min_time=2 --benchmark_format=json > "$OUT/mcap_$preset.json" 2> /dev/null
+done
 for preset in baseline full; do
   taskset -c "$CORE" "$BUILD_DIR/bench/bench_frame_time" --sequence "$OUT/sequence" --preset "$preset" \
     --labels none --repeat "$REPEAT" > "$OUT/frame_time_$preset.txt"
@@ -73,7 +79,11 @@ def rate(name):  # scans per second (CPU time) of the one benchmark in the file
     b = json.load(open(f"{out}/{name}.json"))["benchmarks"]
     return b[0]["items_per_second"]
 
-reads = [("ROS 1 bag, lz4 chunks", rate("bag")), ("MCAP, zstd chunks, chunk CRCs checked", rate("mcap"))]
+reads = [("ROS 1 bag, lz4 chunks (`python3-rosbag`)", rate("bag")),
+         ("MCAP, zstd level 3 chunks with CRCs (`@mcap/core`)", rate("mcap")),
+         ("MCAP as `ros2 bag record -s mcap` writes it: zstd level 1, chunk CRCs", rate("mcap_default")),
+         ("MCAP, rosbag2 preset `zstd_fast`: zstd level -5, no chunk CRCs", rate("mcap_zstd_fast")),
+         ("MCAP, rosbag2 preset `zstd_small`: zstd level 19, chunk CRCs", rate("mcap_zstd_small"))]
 frames = {}
 for preset in ("baseline", "full"):
     a = np.loadtxt(f"{out}/frame_time_{preset}.txt", ndmin=2)
@@ -85,7 +95,10 @@ for preset, (ms, n) in frames.items():
     L.append(f"| {preset} | {ms:.1f} | {1000.0 / ms:.1f} | {n} |")
 L += ["", "Reading and decoding the three real KITTI scans of `tests/data/bags` (about 118 000 points each) "
       "into scans, CPU time on the same core, and how many times the odometry's frame rate that is "
-      "(reading is never the bottleneck at >= 10x):", ""]
+      "(reading is never the bottleneck at >= 10x). The first two rows read the committed fixtures, written "
+      "by the reference libraries; the rosbag2 rows read the same scans written by semlio's MCAP writer with "
+      "the zstd level, chunk size and chunk CRC setting of each rosbag2 MCAP storage preset "
+      "(`BM_McapReadDecodeRosbag2` in `bench/io/bench_mcap_read.cpp`):", ""]
 R = ["| container | scans/s | ms per scan | x baseline's frame rate | x full's frame rate (default preset) |",
      "|---|---|---|---|---|"]
 for name, r in reads:
@@ -98,8 +111,9 @@ print(text)
 if page:
     with open(page, "w") as f:
         f.write("# Reading speed\n\nMade by `scripts/read_speed.sh` (rerun it to check these numbers on your CPU). "
-                "Most of the MCAP row is libzstd's own decompression (`perf record` on bench_mcap_read), which no "
-                "reader can avoid on one core; lz4 decompresses several times faster. The benchmarks count CPU "
+                "Most of an MCAP row's time is libzstd's own decompression (`perf record` on bench_mcap_read), "
+                "which no reader can avoid on one core; it takes longer the higher the level the file was written "
+                "with, and lz4 and zstd's negative levels decompress several times faster. The benchmarks count CPU "
                 "time, so a busy machine moves these numbers less "
                 f"than wall times, but it does move them ({load}).\n\n" + text + "\n")
 if readme:

@@ -1,25 +1,27 @@
 // Reading + decoding the real KITTI scans from an MCAP file (zstd chunks,
-// CDR messages; tests/data/bags/kitti3_zstd.mcap): the must-hold is >= 10x
-// the odometry frame rate on one core (scripts/read_speed.sh measures both on
-// the same core and prints the ratio). Run: taskset -c 1 build/bench/bench_mcap_read
-// Where it stands (2-core AMD EPYC VM, Debian libzstd 1.5.4): libzstd alone
-// decodes one 1.93 MB KITTI chunk at 600-700 MB/s (`zstd -b -d` on the
-// extracted frame), 2.8-3.2 ms per scan: 10x the full preset's frame rate,
-// not the baseline's (about 22 ms a frame there, scripts/read_speed.sh),
-// whatever the reader does. perf of crc:1 after
-// the PCLMUL CRC: libzstd 64 %, PointCloud2 -> Scan 18 %, CRC-32 5 %,
-// file read + message copies ~10 %.
+// CDR messages; tests/data/bags/kitti3_zstd.mcap, written by the reference
+// @mcap/core with zstd level 3): the must-hold is >= 10x the odometry frame
+// rate on one core (scripts/read_speed.sh measures both on the same core and
+// prints the ratios, docs/read_speed.md). Run: taskset -c 1 build/bench/bench_mcap_read
+// BM_McapReadDecodeRosbag2 reads the same scans as rosbag2's MCAP storage
+// writes them with each of its presets (zstd level and chunk CRC): zstd's
+// decompression time depends on the level, and libzstd's own decoding is
+// most of this path (perf record on BM_McapReadDecode: libzstd about 70 %,
+// PointCloud2 -> Scan 15 %, CRC-32 6 %).
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <semlio/core/scan.hpp>
 #include <semlio/io/bag/mcap.hpp>
+#include <semlio/io/bag/mcap_writer.hpp>
 #include <semlio/io/cdr_msgs.hpp>
 #include <semlio/io/pointcloud2.hpp>
 #include <semlio_test/data.hpp>
@@ -94,12 +96,62 @@ const std::string& plain_mcap_path() {
   return path;
 }
 
-/// The whole path per scan: next() (chunk read + zstd decompression + CRC-32
-/// + copy), CDR deserialisation, PointCloud2 -> Scan. The reader restarts
-/// with select(), and its two-chunk cache never holds the next scan's chunk
-/// (three chunks in turn), so every scan is decompressed.
-void BM_McapReadDecode(benchmark::State& state) {
-  semlio::io::McapReader reader(mcap_path(), {.verify_chunk_crc = state.range(0) != 0});
+/// rosbag2's MCAP writer settings (rosbag2_storage_mcap, mcap C++ library):
+/// no preset = zstd level 1 (CompressionLevel::Default), chunk CRC, 768 KiB
+/// chunks; `zstd_fast` = level -5 (Fastest), no chunk CRC; `zstd_small` =
+/// level 19 (Slowest), chunk CRC, 4 MiB chunks.
+struct Rosbag2Preset {
+  const char* name;
+  semlio::io::McapWriterConfig config;
+};
+const Rosbag2Preset kRosbag2Presets[] = {
+    {"default", {.zstd_level = 1, .chunk_bytes = 768 * 1024, .chunk_crc = true}},
+    {"zstd_fast", {.zstd_level = -5, .chunk_bytes = 768 * 1024, .chunk_crc = false}},
+    {"zstd_small", {.zstd_level = 19, .chunk_bytes = 4 * 1024 * 1024, .chunk_crc = true}},
+};
+constexpr int kPresetCopies = 3;  ///< the three scans written this many times in turn: 9 messages
+
+/// The three KITTI scans written kPresetCopies times in turn, as rosbag2
+/// would with `preset`, to the temp dir. Nine messages make at least three
+/// chunks with every preset, so the reader's two-chunk cache never holds the
+/// chunk a pass starts with.
+std::string write_rosbag2_mcap(const Rosbag2Preset& preset) {
+  std::vector<std::pair<std::int64_t, semlio::io::PointCloud2Msg>> clouds;
+  semlio::io::McapReader reader(mcap_path());
+  reader.select({"/kitti/velo/pointcloud"});
+  semlio::io::BagMessage m;
+  while (reader.next(m)) {
+    semlio::io::PointCloud2Msg cloud;
+    semlio::io::parse_cdr_pointcloud2(m.data.data(), m.data.size(), cloud);
+    clouds.emplace_back(m.log_time_ns, std::move(cloud));
+  }
+  const std::string out =
+      (std::filesystem::temp_directory_path() / (std::string("semlio_bench_kitti_rosbag2_") + preset.name + ".mcap"))
+          .string();
+  semlio::io::McapWriter writer(out, preset.config);
+  const std::size_t topic = writer.add_topic("/kitti/velo/pointcloud", semlio::io::RosMessageType::kPointCloud2);
+  const std::int64_t span_ns = clouds.back().first - clouds.front().first + 100'000'000;
+  for (int copy = 0; copy < kPresetCopies; ++copy) {
+    for (const auto& [t, cloud] : clouds) writer.write(topic, t + copy * span_ns, cloud);
+  }
+  writer.close();
+  return out;
+}
+
+/// write_rosbag2_mcap once per preset and process (level 19 compresses at a
+/// few MB/s, and the benchmark function runs several times).
+const std::string& rosbag2_mcap_path(const Rosbag2Preset& preset) {
+  static std::map<const Rosbag2Preset*, std::string> written;  // node-based: references stay valid
+  auto it = written.find(&preset);
+  if (it == written.end()) it = written.emplace(&preset, write_rosbag2_mcap(preset)).first;
+  return it->second;
+}
+
+/// Reads and decodes every scan of `reader` `state` asks for: next() (chunk
+/// read + decompression + CRC-32 + copy), CDR deserialisation, PointCloud2
+/// -> Scan. The reader restarts with select() each pass. Fails the benchmark
+/// unless each pass gives `scans_per_pass` scans; sets items/s = scans/s.
+void read_decode_passes(benchmark::State& state, semlio::io::McapReader& reader, std::int64_t scans_per_pass) {
   semlio::io::BagMessage msg;
   semlio::io::PointCloud2Msg cloud;
   semlio::Scan scan;
@@ -115,29 +167,43 @@ void BM_McapReadDecode(benchmark::State& state) {
     }
     benchmark::DoNotOptimize(scan.points.data());
   }
-  state.SetItemsProcessed(scans);  // items/s = scans/s
+  if (scans != scans_per_pass * static_cast<std::int64_t>(state.iterations())) {
+    state.SkipWithError("unexpected number of scans a pass");
+    return;
+  }
+  state.SetItemsProcessed(scans);
   state.counters["points_per_scan"] = benchmark::Counter(static_cast<double>(points) / static_cast<double>(scans));
 }
+
+/// The whole path per scan on the committed fixture. Its two-chunk cache
+/// never holds the next scan's chunk (three chunks in turn), so every scan
+/// is decompressed.
+void BM_McapReadDecode(benchmark::State& state) {
+  semlio::io::McapReader reader(mcap_path(), {.verify_chunk_crc = state.range(0) != 0});
+  read_decode_passes(state, reader, 3);
+}
 BENCHMARK(BM_McapReadDecode)->ArgName("crc")->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
+
+/// The whole path per scan on the scans as rosbag2 writes them with `preset`.
+void BM_McapReadDecodeRosbag2(benchmark::State& state, const Rosbag2Preset& preset) {
+  const std::string& path = rosbag2_mcap_path(preset);
+  semlio::io::McapReader reader(path);
+  read_decode_passes(state, reader, 3 * kPresetCopies);
+  state.counters["file_mb"] = benchmark::Counter(static_cast<double>(std::filesystem::file_size(path)) / 1e6);
+}
+[[maybe_unused]] const bool kRosbag2Registered = [] {
+  for (const Rosbag2Preset& p : kRosbag2Presets) {
+    benchmark::RegisterBenchmark((std::string("BM_McapReadDecodeRosbag2/") + p.name).c_str(),
+                                 [&p](benchmark::State& st) { BM_McapReadDecodeRosbag2(st, p); })
+        ->Unit(benchmark::kMillisecond);
+  }
+  return true;
+}();
 
 /// The same path on the unchunked copy (no decompression, no CRC).
 void BM_McapReadDecodeUnchunked(benchmark::State& state) {
   semlio::io::McapReader reader(plain_mcap_path());
-  semlio::io::BagMessage msg;
-  semlio::io::PointCloud2Msg cloud;
-  semlio::Scan scan;
-  std::int64_t scans = 0;
-  for (auto _ : state) {
-    reader.select({"/kitti/velo/pointcloud"});
-    while (reader.next(msg)) {
-      semlio::io::parse_cdr_pointcloud2(msg.data.data(), msg.data.size(), cloud);
-      semlio::io::pointcloud2_to_scan(cloud, scan);
-      ++scans;
-    }
-    benchmark::DoNotOptimize(scan.points.data());
-  }
-  if (scans != 3 * static_cast<std::int64_t>(state.iterations())) state.SkipWithError("expected 3 scans a pass");
-  state.SetItemsProcessed(scans);
+  read_decode_passes(state, reader, 3);
 }
 BENCHMARK(BM_McapReadDecodeUnchunked)->Unit(benchmark::kMillisecond);
 

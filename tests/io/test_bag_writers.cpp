@@ -15,6 +15,7 @@
 #include <iterator>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <semlio/core/error.hpp>
@@ -499,6 +500,45 @@ TEST_CASE("McapWriter: magic, header, chunk, message index, summary, footer and 
     CHECK(at<std::uint64_t>(b, ci + 9 + 16) == chunk_at);  // chunk_start_offset
     std::filesystem::remove(path);
   }
+}
+
+TEST_CASE("McapWriter: rosbag2's zstd presets (level -5 without chunk CRC, level 19) and invalid levels",
+          "[io][bags]") {
+  const io::PointCloud2Msg cloud = io::scan_to_pointcloud2(small_scan(), {}, "v");
+  Bytes expect;  // the chunk's records: Schema, Channel, Message of the one cloud
+  for (const auto& [level, chunk_crc] : {std::pair{-5, false}, std::pair{19, true}}) {
+    INFO("level " << level);
+    const auto path = temp_path("preset.mcap");
+    {
+      io::McapWriter w(path.string(), {.zstd_level = level, .chunk_crc = chunk_crc});
+      w.write(w.add_topic("/points", io::RosMessageType::kPointCloud2), 2000, cloud);
+      w.close();
+    }
+    const Bytes b = read_file(path);
+    const std::size_t chunk_at = 9 + 8 + at<std::uint64_t>(b, 9);
+    REQUIRE(b[chunk_at] == 0x06);
+    const std::size_t c = chunk_at + 9;
+    const auto uncompressed_size = at<std::uint64_t>(b, c + 16);
+    const auto crc = at<std::uint32_t>(b, c + 24);
+    const std::size_t rec_len_at = c + 32 + at<std::uint32_t>(b, c + 28);
+    const auto records_len = at<std::uint64_t>(b, rec_len_at);
+    REQUIRE(rec_len_at + 8 + records_len <= b.size());
+    Bytes records(static_cast<std::size_t>(uncompressed_size));
+    REQUIRE(ZSTD_decompress(records.data(), records.size(), b.data() + rec_len_at + 8, records_len) == records.size());
+    // 0 is MCAP's "not computed", what rosbag2's zstd_fast preset stores.
+    CHECK(crc == (chunk_crc ? io::detail::mcap_crc32(records.data(), records.size()) : 0U));
+    if (expect.empty()) {
+      expect = records;
+    } else {
+      CHECK(records == expect);  // the level changes the bytes on disk, not the records
+    }
+    std::filesystem::remove(path);
+  }
+  const auto path = temp_path("bad_level.mcap").string();
+  CHECK_THROWS_AS(io::McapWriter(path, {.zstd_level = 0}), semlio::ConfigError);
+  CHECK_THROWS_AS(io::McapWriter(path, {.zstd_level = ZSTD_minCLevel() - 1}), semlio::ConfigError);
+  CHECK_THROWS_AS(io::McapWriter(path, {.zstd_level = ZSTD_maxCLevel() + 1}), semlio::ConfigError);
+  std::filesystem::remove(path);
 }
 
 }  // namespace test_bag_writers

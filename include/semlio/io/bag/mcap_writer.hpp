@@ -42,8 +42,11 @@ enum class McapCompression : std::uint8_t {
 struct McapWriterConfig {
   MessageEncoding encoding = MessageEncoding::kCdr;  ///< kCdr: profile ros2; kRos1: profile ros1
   McapCompression compression = McapCompression::kZstd;  ///< chunk compression
-  int zstd_level = 3;                                 ///< Zstandard level (1-19)
-  std::size_t chunk_bytes = 4 * 1024 * 1024;          ///< a chunk is closed once it holds this many bytes
+  /// Zstandard level, ZSTD_minCLevel() to ZSTD_maxCLevel() except 0. rosbag2's
+  /// MCAP presets write 1 (its default), -5 (`zstd_fast`) and 19 (`zstd_small`).
+  int zstd_level = 3;
+  std::size_t chunk_bytes = 4 * 1024 * 1024;  ///< a chunk is closed once it holds this many bytes
+  bool chunk_crc = true;  ///< store each chunk's CRC-32 (false: 0, "not computed", as rosbag2's `zstd_fast`)
 };
 
 namespace detail {
@@ -126,9 +129,9 @@ class McapWriter {
   /// Creates (truncates) the file at `path` and writes magic and Header.
   explicit McapWriter(const std::string& path, const McapWriterConfig& config = {}) : config_(config), file_(path) {
     if (config_.chunk_bytes == 0) throw ConfigError("McapWriterConfig.chunk_bytes must be > 0, got 0");
-    if (config_.zstd_level < 1 || config_.zstd_level > ZSTD_maxCLevel()) {
-      throw ConfigError("McapWriterConfig.zstd_level must be in [1, " + std::to_string(ZSTD_maxCLevel()) +
-                        "], got " + std::to_string(config_.zstd_level));
+    if (config_.zstd_level == 0 || config_.zstd_level < ZSTD_minCLevel() || config_.zstd_level > ZSTD_maxCLevel()) {
+      throw ConfigError("McapWriterConfig.zstd_level must be in [" + std::to_string(ZSTD_minCLevel()) + ", " +
+                        std::to_string(ZSTD_maxCLevel()) + "] and not 0, got " + std::to_string(config_.zstd_level));
     }
     std::vector<std::uint8_t> out(detail::kMcapMagic.begin(), detail::kMcapMagic.end());
     detail::McapRecord h;
@@ -352,7 +355,7 @@ class McapWriter {
 
   void flush_chunk() {
     if (chunk_messages_ == 0) return;
-    const std::uint32_t crc = detail::mcap_crc32(chunk_.data(), chunk_.size());
+    const std::uint32_t crc = config_.chunk_crc ? detail::mcap_crc32(chunk_.data(), chunk_.size()) : 0;
     std::vector<std::uint8_t> packed;
     const std::vector<std::uint8_t>* records = &chunk_;
     if (config_.compression == McapCompression::kZstd) {
