@@ -12,24 +12,29 @@
 # Why several seeds: on the rural drive the heading is held by a few trees
 # and posts, and the yaw drift of any configuration is a random walk of
 # about 0.01 deg per frame, so over 300 frames one drive's ATE moves by a
-# third between configurations that differ only in small weights.
+# third between configurations that differ only in small weights. Every
+# configuration runs on the same drives, so the tables give each one's
+# paired difference from `baseline` (its mean over the seeds and standard
+# error): a configuration is called worse than `baseline` only where that
+# difference is at least twice its standard error.
 #
-# Usage: scripts/label_quality_sweep.sh [FRAMES] [SEEDS]   (default 300 "1 2 3")
+# Usage: scripts/label_quality_sweep.sh [FRAMES] [SEEDS]   (default 300 "1 2 3 4 5 6 7 8")
 # Environment: BUILD_DIR (default build/), SKIP_BUILD=1 (use the tools already
 #   built there), OUT (work folder, default ${TMPDIR:-/tmp}/semlio_label_sweep),
 #   WORLDS (default "urban:heavy rural:light"), QUALITIES (target mIoU of the
 #   predictions, default "0.8 0.5 0.2"), JOBS (worlds run at once, default 2),
 #   PAGE (also write the table with its heading to this file, e.g.
-#   docs/label_quality.md), REPORT_ONLY=1 (only the table, from the runs
-#   already in OUT).
+#   docs/label_quality.md), README (a README whose <!-- label_quality:begin -->
+#   block gets the table of `full` against `baseline`, e.g. README.md),
+#   REPORT_ONLY=1 (only the tables, from the runs already in OUT).
 # Disk: one simulated drive at a time, about 5 MB per frame while it runs.
-# Time: about 3 min per drive and label quality on one core (300 frames);
-# the worlds run side by side (JOBS, default 2).
+# Time: about 2 min per seed, world and label quality on one core (300
+# frames, six configurations); the worlds run side by side (JOBS, default 2).
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 frames=${1:-300}
-seeds=${2:-1 2 3}
+seeds=${2:-1 2 3 4 5 6 7 8}
 BUILD_DIR=${BUILD_DIR:-$root/build}
 OUT=${OUT:-${TMPDIR:-/tmp}/semlio_label_sweep}
 WORLDS=${WORLDS:-"urban:heavy rural:light"}
@@ -110,8 +115,8 @@ if [[ "${REPORT_ONLY:-0}" != 1 ]]; then
   for wt in $WORLDS; do cat "$OUT/rows_${wt%%:*}.tsv" >> "$OUT/rows.tsv"; done
 fi
 
-/usr/bin/python3 - "$OUT" "$frames" "$seeds" "${CONFIGS[@]}" > "$OUT/table.md" << 'EOF'
-import json, statistics, sys
+SEMLIO_ROOT=$root /usr/bin/python3 - "$OUT" "$frames" "$seeds" "${CONFIGS[@]}" > "$OUT/table.md" << 'EOF'
+import json, math, os, statistics, sys
 out, frames, seeds = sys.argv[1], sys.argv[2], sys.argv[3].split()
 configs = [c.split(':')[0] for c in sys.argv[4:]]
 
@@ -130,6 +135,18 @@ def mean(v):
     v = [x for x in v if x is not None]
     return sum(v) / len(v) if v else None
 
+def paired(a, b):
+    """Mean and standard error of b - a over the seeds where both exist, seeds where b < a, seeds."""
+    d = [y - x for x, y in zip(a, b) if x is not None and y is not None]
+    if len(d) < 2:
+        return None, None, 0, len(d)
+    return statistics.mean(d), statistics.stdev(d) / math.sqrt(len(d)), sum(1 for x in d if x < 0), len(d)
+
+def worse(a, b):
+    """b worse than a beyond the seeds' noise: a mean paired difference of at least 2 standard errors."""
+    m, se, _, _ = paired(a, b)
+    return m is not None and m > 0 and m >= 2 * se
+
 groups = {}  # (world, traffic, quality) -> [(miou, row)], in file order
 for line in open(f"{out}/rows.tsv"):
     world, traffic, quality, miou, row = line.rstrip("\n").split("\t")
@@ -142,16 +159,18 @@ print(f"Simulated drives of {frames} frames, seeds {', '.join(seeds)} (each seed
 print()
 print("| world | labels | kappa corners / surfaces | " + " | ".join(configs) + " |")
 print("|---|---|---|" + "---|" * len(configs))
+pairs = []
 for (world, traffic, quality), rows in groups.items():
     per = {c: [metrics(report(row, c)) for _, row in rows] for c in configs}
-    ate = {c: mean([m[0] for m in per[c]]) for c in configs}
-    terr = {c: mean([m[1] for m in per[c]]) for c in configs}
+    ate = {c: [m[0] for m in per[c]] for c in configs}
+    terr = {c: [m[1] for m in per[c]] for c in configs}
     cells = []
     for c in configs:
-        cell = "-" if ate[c] is None else f"{ate[c]:.3f}"
-        if terr[c] is not None:
-            cell += f" / {terr[c]:.3f}"
-        if c != "baseline" and ate[c] is not None and ate["baseline"] is not None and ate[c] > ate["baseline"] * 1.001:
+        a, t = mean(ate[c]), mean(terr[c])
+        cell = "-" if a is None else f"{a:.3f}"
+        if t is not None:
+            cell += f" / {t:.3f}"
+        if c != "baseline" and (worse(ate["baseline"], ate[c]) or worse(terr["baseline"], terr[c])):
             cell = f"**{cell}**"
         cells.append(cell)
     fulls = [report(row, "full") for _, row in rows]
@@ -160,8 +179,36 @@ for (world, traffic, quality), rows in groups.items():
     mious = [float(m) for m, _ in rows if m not in ("-", "")]
     label = "exact" if quality == "exact" else f"{quality} ({sum(mious) / len(mious):.2f})"
     print(f"| {world}, {traffic} traffic | {label} | {k} | " + " | ".join(cells) + " |")
+    pairs.append((f"{world}, {traffic} traffic", label, paired(ate["baseline"], ate["full"]),
+                  paired(terr["baseline"], terr["full"])))
 print()
-print("Cells: ATE RMSE [m] / KITTI t_err [%]; **bold**: mean ATE above `baseline`'s on the same drives and labels.")
+print("Cells: ATE RMSE [m] / KITTI t_err [%]; **bold**: worse than `baseline` on the same drives and labels beyond "
+      "the seeds' noise (a mean paired difference in ATE or t_err of at least twice its standard error).")
+print()
+print("`full` against `baseline` on the same drives: the mean over the seeds of full's value minus baseline's, "
+      "+- its standard error, and on how many seeds `full` was the better one. `full` is worse where a mean "
+      "difference is positive and at least twice its standard error.")
+print()
+P = ["| world | labels | ATE full - baseline [m] | t_err full - baseline [%] | full better (ATE, t_err) | full no worse |",
+     "|---|---|---|---|---|---|"]
+for world, label, (am, ase, ab, an), (tm, tse, tb, tn) in pairs:
+    if am is None or tm is None:
+        P.append(f"| {world} | {label} | - | - | - | - |")
+        continue
+    if am <= 0 and tm <= 0:
+        verdict = "yes"
+    elif (am > 0 and am >= 2 * ase) or (tm > 0 and tm >= 2 * tse):
+        verdict = "**no**"
+    else:
+        verdict = "within the seeds' noise"
+    P.append(f"| {world} | {label} | {am:+.4f} +- {ase:.4f} | {tm:+.4f} +- {tse:.4f} | "
+             f"{ab} / {an}, {tb} / {tn} | {verdict} |")
+print("\n".join(P))
+readme = os.environ.get("README", "")
+if readme:
+    sys.path.insert(0, os.path.join(os.environ["SEMLIO_ROOT"], "scripts"))
+    from page_util import replace_readme_block
+    replace_readme_block(readme, "label_quality", "label_quality_sweep.sh", P)
 EOF
 cat "$OUT/table.md"
 if [[ -n "${PAGE:-}" ]]; then
