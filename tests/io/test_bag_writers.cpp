@@ -502,7 +502,7 @@ TEST_CASE("McapWriter: magic, header, chunk, message index, summary, footer and 
   }
 }
 
-TEST_CASE("McapWriter: rosbag2's zstd presets (level -5 without chunk CRC, level 19) and invalid levels",
+TEST_CASE("McapWriter: rosbag2's zstd presets (-5 without chunk CRC, 19), bad settings leave the file alone",
           "[io][bags]") {
   const io::PointCloud2Msg cloud = io::scan_to_pointcloud2(small_scan(), {}, "v");
   Bytes expect;  // the chunk's records: Schema, Channel, Message of the one cloud
@@ -534,10 +534,15 @@ TEST_CASE("McapWriter: rosbag2's zstd presets (level -5 without chunk CRC, level
     }
     std::filesystem::remove(path);
   }
-  const auto path = temp_path("bad_level.mcap").string();
-  CHECK_THROWS_AS(io::McapWriter(path, {.zstd_level = 0}), semlio::ConfigError);
-  CHECK_THROWS_AS(io::McapWriter(path, {.zstd_level = ZSTD_minCLevel() - 1}), semlio::ConfigError);
-  CHECK_THROWS_AS(io::McapWriter(path, {.zstd_level = ZSTD_maxCLevel() + 1}), semlio::ConfigError);
+  // Invalid settings are refused before the file is touched: an existing file keeps its bytes.
+  const auto path = temp_path("bad_level.mcap");
+  std::ofstream(path) << "keep me";
+  CHECK_THROWS_AS(io::McapWriter(path.string(), {.zstd_level = 0}), semlio::ConfigError);
+  CHECK_THROWS_AS(io::McapWriter(path.string(), {.zstd_level = ZSTD_minCLevel() - 1}), semlio::ConfigError);
+  CHECK_THROWS_AS(io::McapWriter(path.string(), {.zstd_level = ZSTD_maxCLevel() + 1}), semlio::ConfigError);
+  CHECK_THROWS_AS(io::McapWriter(path.string(), {.chunk_bytes = 0}), semlio::ConfigError);
+  CHECK_THROWS_AS(io::Rosbag1Writer(path.string(), {.chunk_bytes = 0}), semlio::ConfigError);
+  CHECK(read_file(path) == Bytes{'k', 'e', 'e', 'p', ' ', 'm', 'e'});
   std::filesystem::remove(path);
 }
 

@@ -126,13 +126,10 @@ class McapWriter {
  public:
   using Config = McapWriterConfig;
 
-  /// Creates (truncates) the file at `path` and writes magic and Header.
-  explicit McapWriter(const std::string& path, const McapWriterConfig& config = {}) : config_(config), file_(path) {
-    if (config_.chunk_bytes == 0) throw ConfigError("McapWriterConfig.chunk_bytes must be > 0, got 0");
-    if (config_.zstd_level == 0 || config_.zstd_level < ZSTD_minCLevel() || config_.zstd_level > ZSTD_maxCLevel()) {
-      throw ConfigError("McapWriterConfig.zstd_level must be in [" + std::to_string(ZSTD_minCLevel()) + ", " +
-                        std::to_string(ZSTD_maxCLevel()) + "] and not 0, got " + std::to_string(config_.zstd_level));
-    }
+  /// Creates (truncates) the file at `path` and writes magic and Header;
+  /// throws ConfigError for invalid settings before the file is touched.
+  explicit McapWriter(const std::string& path, const McapWriterConfig& config = {})
+      : config_(checked(config)), file_(path) {
     std::vector<std::uint8_t> out(detail::kMcapMagic.begin(), detail::kMcapMagic.end());
     detail::McapRecord h;
     h.string(cdr() ? "ros2" : "ros1").string("semlio");
@@ -407,6 +404,15 @@ class McapWriter {
     ci.append_to(chunk_indexes_.back(), detail::McapOp::kChunkIndex);
     chunk_.clear();
     chunk_messages_ = 0;
+  }
+
+  static const McapWriterConfig& checked(const McapWriterConfig& c) {
+    if (c.chunk_bytes == 0) throw ConfigError("McapWriterConfig.chunk_bytes must be > 0, got 0");
+    if (c.zstd_level == 0 || c.zstd_level < ZSTD_minCLevel() || c.zstd_level > ZSTD_maxCLevel()) {
+      throw ConfigError("McapWriterConfig.zstd_level must be in [" + std::to_string(ZSTD_minCLevel()) + ", " +
+                        std::to_string(ZSTD_maxCLevel()) + "] and not 0, got " + std::to_string(c.zstd_level));
+    }
+    return c;
   }
 
   McapWriterConfig config_;

@@ -109,10 +109,10 @@ class Rosbag1Writer {
  public:
   using Config = Rosbag1WriterConfig;
 
-  /// Creates (truncates) the bag at `path`.
+  /// Creates (truncates) the bag at `path`; throws ConfigError for invalid
+  /// settings before the file is touched.
   explicit Rosbag1Writer(const std::string& path, const Rosbag1WriterConfig& config = {})
-      : config_(config), file_(path) {
-    if (config_.chunk_bytes == 0) throw ConfigError("Rosbag1WriterConfig.chunk_bytes must be > 0, got 0");
+      : config_(checked(config)), file_(path) {
     static constexpr std::string_view kMagic = "#ROSBAG V2.0\n";
     file_.write(kMagic.data(), kMagic.size());
     file_.write(bag_header_record(0, 0, 0));
@@ -308,6 +308,11 @@ class Rosbag1Writer {
     chunks_.push_back(std::move(info));
     chunk_.clear();
     chunk_messages_ = 0;
+  }
+
+  static const Rosbag1WriterConfig& checked(const Rosbag1WriterConfig& c) {
+    if (c.chunk_bytes == 0) throw ConfigError("Rosbag1WriterConfig.chunk_bytes must be > 0, got 0");
+    return c;
   }
 
   Rosbag1WriterConfig config_;
