@@ -142,10 +142,14 @@ def paired(a, b):
         return None, None, 0, len(d)
     return statistics.mean(d), statistics.stdev(d) / math.sqrt(len(d)), sum(1 for x in d if x < 0), len(d)
 
-def worse(a, b):
-    """b worse than a beyond the seeds' noise: a mean paired difference of at least 2 standard errors."""
-    m, se, _, _ = paired(a, b)
+def beyond_noise(m, se):
+    """A positive mean paired difference of at least 2 standard errors."""
     return m is not None and m > 0 and m >= 2 * se
+
+def worse(a, b):
+    """b worse than a beyond the seeds' noise."""
+    m, se, _, _ = paired(a, b)
+    return beyond_noise(m, se)
 
 groups = {}  # (world, traffic, quality) -> [(miou, row)], in file order
 for line in open(f"{out}/rows.tsv"):
@@ -197,7 +201,7 @@ for world, label, (am, ase, ab, an), (tm, tse, tb, tn) in pairs:
         continue
     if am <= 0 and tm <= 0:
         verdict = "yes"
-    elif (am > 0 and am >= 2 * ase) or (tm > 0 and tm >= 2 * tse):
+    elif beyond_noise(am, ase) or beyond_noise(tm, tse):
         verdict = "**no**"
     else:
         verdict = "within the seeds' noise"

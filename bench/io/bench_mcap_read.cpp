@@ -33,16 +33,25 @@ const std::string& mcap_path() {
   return path;
 }
 
+/// The fixture's three KITTI cloud messages (CDR bytes and log times), read once.
+const std::vector<semlio::io::BagMessage>& fixture_scans() {
+  static const std::vector<semlio::io::BagMessage> scans = [] {
+    std::vector<semlio::io::BagMessage> out;
+    semlio::io::McapReader reader(mcap_path());
+    reader.select({"/kitti/velo/pointcloud"});
+    semlio::io::BagMessage m;
+    while (reader.next(m)) out.push_back(m);
+    return out;
+  }();
+  return scans;
+}
+
 /// The three KITTI scans of kitti3_zstd.mcap as an MCAP file without chunks
 /// (Messages directly in the data section, no summary), written once to the
 /// temp dir: the reader's cost without decompression and CRC, for comparison.
 const std::string& plain_mcap_path() {
   static const std::string path = [] {
-    std::vector<semlio::io::BagMessage> scans;
-    semlio::io::McapReader reader(mcap_path());
-    reader.select({"/kitti/velo/pointcloud"});
-    semlio::io::BagMessage m;
-    while (reader.next(m)) scans.push_back(m);
+    const std::vector<semlio::io::BagMessage>& scans = fixture_scans();
     const std::string out = (std::filesystem::temp_directory_path() / "semlio_bench_kitti3_plain.mcap").string();
     std::ofstream f(out, std::ios::binary | std::ios::trunc);
     const auto bytes = [&](const void* p, std::size_t n) { f.write(static_cast<const char*>(p), static_cast<std::streamsize>(n)); };
@@ -117,10 +126,7 @@ constexpr int kPresetCopies = 3;  ///< the three scans written this many times i
 /// chunk a pass starts with.
 std::string write_rosbag2_mcap(const Rosbag2Preset& preset) {
   std::vector<std::pair<std::int64_t, semlio::io::PointCloud2Msg>> clouds;
-  semlio::io::McapReader reader(mcap_path());
-  reader.select({"/kitti/velo/pointcloud"});
-  semlio::io::BagMessage m;
-  while (reader.next(m)) {
+  for (const semlio::io::BagMessage& m : fixture_scans()) {
     semlio::io::PointCloud2Msg cloud;
     semlio::io::parse_cdr_pointcloud2(m.data.data(), m.data.size(), cloud);
     clouds.emplace_back(m.log_time_ns, std::move(cloud));
@@ -225,16 +231,11 @@ BENCHMARK(BM_McapNext)->ArgName("crc")->Arg(1)->Arg(0)->Unit(benchmark::kMillise
 
 /// CDR deserialisation alone (mostly the copy of the ~1.9 MB point data).
 void BM_CdrParsePointCloud2(benchmark::State& state) {
-  semlio::io::McapReader reader(mcap_path());
-  reader.select({"/kitti/velo/pointcloud"});
-  std::vector<std::vector<std::uint8_t>> messages;
-  semlio::io::BagMessage msg;
-  while (reader.next(msg)) messages.push_back(msg.data);
   semlio::io::PointCloud2Msg cloud;
   std::int64_t scans = 0;
   for (auto _ : state) {
-    for (const auto& m : messages) {
-      semlio::io::parse_cdr_pointcloud2(m.data(), m.size(), cloud);
+    for (const semlio::io::BagMessage& m : fixture_scans()) {
+      semlio::io::parse_cdr_pointcloud2(m.data.data(), m.data.size(), cloud);
       benchmark::DoNotOptimize(cloud.data.data());
       ++scans;
     }
