@@ -159,7 +159,7 @@ for line in open(f"{out}/rows.tsv"):
 print(f"Simulated drives of {frames} frames, seeds {', '.join(seeds)} (each seed another world and drive); "
       "every cell is the mean over the seeds. `labels`: the predictions' target mIoU and, in brackets, "
       "the measured one (exact: the simulator's own labels). `full` uses the chance-corrected weights "
-      "(the default), `full_paper` the paper's w = a.")
+      "(the default: two static classes agree), `full_paper` the paper's w = a with eq. 10 as written.")
 print()
 print("| world | labels | kappa corners / surfaces | " + " | ".join(configs) + " |")
 print("|---|---|---|" + "---|" * len(configs))
@@ -224,7 +224,7 @@ if [[ -n "${PAGE:-}" ]]; then
     echo "given mIoU (errors at object boundaries and whole objects switching class, as a network's:"
     echo "\`include/semlio/sim/label_noise.hpp\`), and on the simulator's exact labels. kappa is the frames'"
     echo "median chance-corrected agreement of feature and map labels, what the chance-corrected semantic"
-    echo "weights trust ([method.md](method.md), [config.md](config.md) \`semantic_weights.mode\`)."
+    echo "weights trust ([method.md](method.md), [config.md](config.md) \`semantic_weights\`)."
     echo
     cat "$OUT/table.md"
   } > "$PAGE"

@@ -335,6 +335,8 @@ inline const std::map<std::string, Setters>& sections() {
       {"semantic_weights",
        {
            {"mode", [](Targets& t, const YAML::Node& n) { read_weight_mode(t.s.semantic_weights.mode, n); }},
+           {"static_classes_agree",
+            [](Targets& t, const YAML::Node& n) { read_value(t.s.semantic_weights.static_classes_agree, n); }},
        }},
       {"pose_threshold",
        {

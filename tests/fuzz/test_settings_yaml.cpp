@@ -108,6 +108,13 @@ TEST_CASE("settings YAML: semantic_weights.mode takes its three names, anything 
     semlio_examples::parse_settings_yaml("semantic_weights: {mode: " + name + "}\n", "t.yaml", s);
     CHECK(s.semantic_weights.mode == mode);
   }
+  semlio::PipelineSettings s;
+  REQUIRE(s.semantic_weights.static_classes_agree);
+  semlio_examples::parse_settings_yaml("semantic_weights: {static_classes_agree: false}\n", "t.yaml", s);
+  CHECK_FALSE(s.semantic_weights.static_classes_agree);
+  CHECK(s.semantic_weights.mode == semlio::SemanticWeightMode::kChanceCorrected);
+  CHECK_THAT(config_error("semantic_weights: {static_classes_agree: maybe}\n"),
+             Catch::Contains("semantic_weights.static_classes_agree"));
 }
 
 TEST_CASE("settings YAML: a missing, huge or non-regular config file is an IoError", "[fuzz][config]") {

@@ -239,8 +239,11 @@ TEST_CASE("Semantic weight scales residual and Jacobian (eq. 10-12)", "[residual
   CHECK(semlio::semantic_weight(Class::kCar, line) == 0.0);
   CHECK(semlio::semantic_weight(Class::kPole, MatchedPoints{}) == 0.0);
   const FeaturePoint f{{1, 3, 4}, Class::kPole};
+  // Eq. 10 as written counts the same class only: the paper's mode.
+  const WeightedLine paper_line(semlio::PointToLine{}, {.mode = semlio::SemanticWeightMode::kPaper});
+  const WeightedPlane paper_plane(semlio::PointToPlane{}, {.mode = semlio::SemanticWeightMode::kPaper});
   const auto plain = semlio::PointToLine{}.evaluate(f, line, SE3d());
-  const auto weighted = WeightedLine{}.evaluate(f, line, SE3d());
+  const auto weighted = paper_line.evaluate(f, line, SE3d());
   REQUIRE(weighted.valid);
   CHECK(plain.r.norm() == Approx(5.0));
   CHECK(weighted.r.norm() == Approx(0.6 * 5.0));  // eq. 11: d'_e = 3
@@ -249,20 +252,20 @@ TEST_CASE("Semantic weight scales residual and Jacobian (eq. 10-12)", "[residual
   // Eq. 12 on a plane: 2 of 4 road -> w = 0.5; d_s = 0.5 -> d'_s = 0.25.
   const MatchedPoints plane = make_matches({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}},
                                            {Class::kRoad, Class::kSidewalk, Class::kRoad, Class::kTerrain});
-  const auto ws = WeightedPlane{}.evaluate({{0.3, 0.2, 0.5}, Class::kRoad}, plane, SE3d());
+  const auto ws = paper_plane.evaluate({{0.3, 0.2, 0.5}, Class::kRoad}, plane, SE3d());
   REQUIRE(ws.valid);
   CHECK(std::abs(ws.r(0)) == Approx(0.25));
   // No label agrees: weight 0, the term stays valid and contributes nothing.
-  const auto none = WeightedPlane{}.evaluate({{0.3, 0.2, 0.5}, Class::kCar}, plane, SE3d());
+  const auto none = paper_plane.evaluate({{0.3, 0.2, 0.5}, Class::kCar}, plane, SE3d());
   CHECK(none.valid);
   CHECK(none.r.isZero());
 }
 
 TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label reliability falls", "[residual]") {
   using semlio::SemanticWeightMode;
-  // 1 of 4 matches agrees: a = 0.25.
+  // 1 of 4 matches agrees, in every mode (the others are movable or unlabelled): a = 0.25.
   const MatchedPoints plane = make_matches({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}},
-                                           {Class::kRoad, Class::kSidewalk, Class::kSidewalk, Class::kTerrain});
+                                           {Class::kRoad, Class::kCar, Class::kPerson, Class::kUnlabeled});
   const FeaturePoint f{{0.3, 0.2, 0.5}, Class::kRoad};
   const double d = std::abs(semlio::PointToPlane{}.evaluate(f, plane, SE3d()).r(0));
   REQUIRE(d == Approx(0.5));
@@ -309,6 +312,48 @@ TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label rel
     CHECK(weighted_distance(w) == on_distance);
     CHECK(on_distance == Approx(0.25 * d));
   }
+}
+
+TEST_CASE("Semantic weight: two static classes agree in the chance-corrected mode only", "[residual]") {
+  using semlio::SemanticWeightMode;
+  using semlio::labels_agree;
+  // Static with static agrees; movable or unlabelled agrees only with itself.
+  CHECK(labels_agree(Class::kRoad, Class::kSidewalk, true));
+  CHECK(labels_agree(Class::kTrunk, Class::kVegetation, true));
+  CHECK(labels_agree(Class::kTrafficSign, Class::kBuilding, true));
+  CHECK_FALSE(labels_agree(Class::kRoad, Class::kSidewalk, false));
+  CHECK_FALSE(labels_agree(Class::kRoad, Class::kCar, true));
+  CHECK_FALSE(labels_agree(Class::kCar, Class::kTruck, true));
+  CHECK_FALSE(labels_agree(Class::kPerson, Class::kBicyclist, true));
+  CHECK_FALSE(labels_agree(Class::kRoad, Class::kUnlabeled, true));
+  CHECK_FALSE(labels_agree(Class::kUnlabeled, Class::kRoad, true));
+  CHECK(labels_agree(Class::kCar, Class::kCar, true));
+  CHECK(labels_agree(Class::kUnlabeled, Class::kUnlabeled, false));
+
+  // A kerb corner: road feature, matches on road, sidewalk, terrain, car, unlabelled.
+  const MatchedPoints plane = make_matches({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 0, 0}},
+                                           {Class::kRoad, Class::kSidewalk, Class::kTerrain, Class::kCar,
+                                            Class::kUnlabeled});
+  CHECK(semlio::semantic_weight(Class::kRoad, plane) == Approx(0.2));          // eq. 10: 1 of 5
+  CHECK(semlio::semantic_weight(Class::kRoad, plane, true) == Approx(0.6));    // 3 of 5 static
+  CHECK(semlio::semantic_weight(Class::kCar, plane, true) == Approx(0.2));     // the car only
+  const FeaturePoint f{{0.3, 0.2, 0.5}, Class::kRoad};
+  const double d = std::abs(semlio::PointToPlane{}.evaluate(f, plane, SE3d()).r(0));
+  REQUIRE(d > 0.0);
+  const auto weighted_distance = [&](const WeightedPlane& w) { return std::abs(w.evaluate(f, plane, SE3d()).r(0)); };
+
+  WeightedPlane corrected;  // the defaults: chance-corrected, static classes agree
+  CHECK(corrected.config().static_classes_agree);
+  corrected.set_label_reliability(0.5);
+  CHECK(weighted_distance(corrected) == Approx((1.0 - 0.5 * 0.4) * d));  // a = 0.6
+  WeightedPlane literal(semlio::PointToPlane{}, {.mode = SemanticWeightMode::kChanceCorrected,
+                                                 .static_classes_agree = false});
+  literal.set_label_reliability(0.5);
+  CHECK(weighted_distance(literal) == Approx((1.0 - 0.5 * 0.8) * d));  // a = 0.2
+  // The paper's mode keeps eq. 10 as written whatever the flag says.
+  const WeightedPlane paper(semlio::PointToPlane{}, {.mode = SemanticWeightMode::kPaper});
+  REQUIRE(paper.config().static_classes_agree);
+  CHECK(weighted_distance(paper) == Approx(0.2 * d));
 }
 
 TEST_CASE("Robust kernels give the IRLS weight of the current residual", "[residual]") {

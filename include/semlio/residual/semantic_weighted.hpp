@@ -19,6 +19,19 @@
 /// disagreement costs as much as the labels have shown they are worth on
 /// this frame. scripts/label_quality_sweep.sh compares the modes from exact
 /// labels to mIoU 0.2 (docs/label_quality.md).
+///
+/// The chance-corrected weight also counts a match as agreeing when the
+/// feature and the map point both carry static classes (road and terrain,
+/// vegetation and trunk, building and fence). Eq. 10 guards against a
+/// feature matched to the wrong object; a point of a neighbouring static
+/// class is as fixed as one of the same class. Such classes meet at every
+/// kerb and tree, so even exact labels disagree there (a kerb's corner
+/// matches road and sidewalk points). Counting those disagreements costs
+/// information along the road, the direction a rural drive holds weakest:
+/// with the literal eq. 10, the weights alone (`weights_only`) are worse than
+/// no weights on the rural drives of scripts/label_quality_sweep.sh at every
+/// label quality. Only a disagreement that involves a movable class or an
+/// unlabelled point lowers a.
 
 #include <algorithm>
 #include <cmath>
@@ -33,12 +46,20 @@
 
 namespace semlio {
 
-/// Eq. 10-12: fraction of the matches whose label equals `label`; 0 without matches.
-inline double semantic_weight(Class label, const MatchedPoints& matches) {
+/// True when a map point labelled `match` agrees with a feature labelled
+/// `label`: the same class, or (when static_classes_agree) two static classes.
+constexpr bool labels_agree(Class label, Class match, bool static_classes_agree) noexcept {
+  return match == label || (static_classes_agree && is_static(label) && is_static(match));
+}
+
+/// Eq. 10-12: fraction of the matches whose label agrees with `label`
+/// (labels_agree(); the same class only by default, eq. 10 as written);
+/// 0 without matches.
+inline double semantic_weight(Class label, const MatchedPoints& matches, bool static_classes_agree = false) {
   if (matches.count <= 0) return 0.0;
   int same = 0;
   for (int k = 0; k < matches.count; ++k) {
-    if (matches.labels[static_cast<std::size_t>(k)] == label) ++same;  // eq. 10
+    if (labels_agree(label, matches.labels[static_cast<std::size_t>(k)], static_classes_agree)) ++same;  // eq. 10
   }
   return static_cast<double>(same) / static_cast<double>(matches.count);
 }
@@ -53,6 +74,9 @@ enum class SemanticWeightMode : std::uint8_t {
 /// Settings of SemanticWeighted.
 struct SemanticWeightConfig {
   SemanticWeightMode mode = SemanticWeightMode::kChanceCorrected;  ///< weight rule (file comment)
+  /// kChanceCorrected only: two static classes count as agreeing in a (file
+  /// comment). kPaper keeps eq. 10 as written.
+  bool static_classes_agree = true;
 };
 
 /// Residual R with r and J multiplied by the semantic weight (eq. 11-12).
@@ -135,7 +159,8 @@ class SemanticWeighted {
   ResidualTerm<kDim> weighted(const FeaturePoint& feature, const MatchedPoints& matches,
                               ResidualTerm<kDim> term) const {
     if (!term.valid) return term;
-    const double w = weight(semantic_weight(feature.label, matches));
+    const bool static_agree = config_.static_classes_agree && config_.mode == SemanticWeightMode::kChanceCorrected;
+    const double w = weight(semantic_weight(feature.label, matches, static_agree));
     term.r *= w;
     term.J_r_xi *= w;
     return term;
