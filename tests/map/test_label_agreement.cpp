@@ -108,4 +108,50 @@ TEST_CASE("LabelAgreement: no pairs, one class or unlabeled features give kappa 
   CHECK(skipped.pairs() == 0);
 }
 
+TEST_CASE("LabelAgreement: with static classes merged, kappa counts agreement as the default weight does",
+          "[map][semantic]") {
+  // Map: 0..3 road, 4..5 sidewalk, 6..7 car.
+  const FeatureMap map = line_map({Class::kRoad, Class::kRoad, Class::kRoad, Class::kRoad, Class::kSidewalk,
+                                   Class::kSidewalk, Class::kCar, Class::kCar});
+  FeatureSet f;
+  f.points.assign(4, Eigen::Vector3f::Zero());
+  f.labels = {Class::kRoad, Class::kSidewalk, Class::kCar, Class::kRoad};
+  // Pairs (feature label, map label):
+  //   f0 road: road, road, sidewalk   -> same class 2, static 3
+  //   f1 sidewalk: sidewalk, road     -> same class 1, static 2
+  //   f2 car: car, car, road          -> same class 2, static 2
+  //   f3 road: car                    -> 0, 0
+  const semlio::Correspondences c{matches_of({0, 1, 4}), matches_of({5, 2}), matches_of({6, 7, 3}),
+                                  matches_of({6})};
+  LabelAgreement a;
+  a.add(f, c, map);
+  // 9 pairs. Same class: 5 agree; static classes merged: 7 agree.
+  // Feature side: road 4, sidewalk 2, car 3 (static 6); map side: road 4,
+  // sidewalk 2, car 3 (static 6).
+  REQUIRE(a.pairs() == 9);
+  CHECK(a.observed() == Approx(5.0 / 9.0));
+  CHECK(a.observed(true) == Approx(7.0 / 9.0));
+  const double chance_classes = (4.0 * 4.0 + 2.0 * 2.0 + 3.0 * 3.0) / 81.0;
+  const double chance_merged = (6.0 * 6.0 + 3.0 * 3.0) / 81.0;
+  CHECK(a.chance() == Approx(chance_classes));
+  CHECK(a.chance(true) == Approx(chance_merged));
+  CHECK(a.kappa() == Approx((5.0 / 9.0 - chance_classes) / (1.0 - chance_classes)));
+  CHECK(a.kappa(true) == Approx((7.0 / 9.0 - chance_merged) / (1.0 - chance_merged)));
+
+  // Only static classes: merged, every pair agrees by chance, kappa exactly
+  // 0 (the chance term is summed from counts, so it is exactly 1).
+  const FeatureMap statics = line_map({Class::kRoad, Class::kSidewalk, Class::kTerrain, Class::kBuilding,
+                                       Class::kVegetation, Class::kTrunk, Class::kPole});
+  FeatureSet g;
+  g.points.assign(3, Eigen::Vector3f::Zero());
+  g.labels = {Class::kRoad, Class::kVegetation, Class::kPole};
+  const semlio::Correspondences d{matches_of({0, 1, 2}), matches_of({4, 5, 3}), matches_of({6, 3, 5})};
+  LabelAgreement s;
+  s.add(g, d, statics);
+  CHECK(s.observed(true) == 1.0);
+  CHECK(s.chance(true) == 1.0);
+  CHECK(s.kappa(true) == 0.0);
+  CHECK(s.kappa() > 0.0);  // the 19 classes still tell them apart
+}
+
 }  // namespace test_label_agreement

@@ -57,13 +57,15 @@ TEST_CASE("ScanToMapProblem hands each feature kind's kappa to its semantic weig
     corners.labels.push_back(Class::kPole);
   }
 
-  using Weighted = semlio::LoamResiduals<semlio::SemanticWeighted<semlio::PointToLine>,
-                                         semlio::SemanticWeighted<semlio::PointToPlane>>;
-  semlio::ScanToMapProblem<semlio::NearestK, semlio::SemanticWeighted<semlio::PointToLine>,
-                           semlio::SemanticWeighted<semlio::PointToPlane>>
-      problem(semlio::NearestK{}, Weighted{semlio::SemanticWeighted<semlio::PointToLine>{},
-                                                 semlio::SemanticWeighted<semlio::PointToPlane>{}});
-  static_assert(decltype(problem)::kWeighsLabels);
+  using WeightedLine = semlio::SemanticWeighted<semlio::PointToLine>;
+  using WeightedPlane = semlio::SemanticWeighted<semlio::PointToPlane>;
+  using Weighted = semlio::LoamResiduals<WeightedLine, WeightedPlane>;
+  using Problem = semlio::ScanToMapProblem<semlio::NearestK, WeightedLine, WeightedPlane>;
+  // Weights that count the same class only: kappa over the 19 classes.
+  const semlio::SemanticWeightConfig same_class{.static_classes_agree = false};
+  Problem problem(semlio::NearestK{}, Weighted{WeightedLine(semlio::PointToLine{}, same_class),
+                                               WeightedPlane(semlio::PointToPlane{}, same_class)});
+  static_assert(Problem::kWeighsLabels);
   problem.set_maps(corner_map, surface_map);
   problem.set_features(corners, surfaces);
   CHECK(std::isnan(problem.corner_label_reliability()));  // nothing associated yet
@@ -79,6 +81,18 @@ TEST_CASE("ScanToMapProblem hands each feature kind's kappa to its semantic weig
   CHECK(problem.surface_label_reliability() == surface_expected.kappa());
   // The two kinds differ here (poles half mislabelled), so one joint kappa would be wrong for both.
   CHECK(problem.corner_label_reliability() < problem.surface_label_reliability());
+
+  // The default weights count two static classes as agreeing, and their
+  // kappa counts agreement the same way: pole / sign and sidewalk / road are
+  // all static here, so every pair agrees by chance alone and kappa is 0.
+  Problem merged(semlio::NearestK{}, Weighted{WeightedLine{}, WeightedPlane{}});
+  merged.set_maps(corner_map, surface_map);
+  merged.set_features(corners, surfaces);
+  merged.associate(semlio::SE3d());
+  CHECK(merged.corner_label_reliability() == corner_expected.kappa(true));
+  CHECK(merged.surface_label_reliability() == surface_expected.kappa(true));
+  CHECK(merged.corner_label_reliability() == 0.0);
+  CHECK(merged.surface_label_reliability() == 0.0);
 
   // Residuals without semantic weights take no kappa and report none.
   semlio::ScanToMapProblem<semlio::NearestK, semlio::PointToLine, semlio::PointToPlane> plain(

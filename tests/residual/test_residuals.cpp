@@ -354,6 +354,10 @@ TEST_CASE("Semantic weight: two static classes agree in the chance-corrected mod
   const WeightedPlane paper(semlio::PointToPlane{}, {.mode = SemanticWeightMode::kPaper});
   REQUIRE(paper.config().static_classes_agree);
   CHECK(weighted_distance(paper) == Approx(0.2 * d));
+  // What the scan-to-map problem asks to count its kappa the same way.
+  CHECK(corrected.static_classes_agree());
+  CHECK_FALSE(literal.static_classes_agree());
+  CHECK_FALSE(paper.static_classes_agree());
 }
 
 TEST_CASE("Robust kernels give the IRLS weight of the current residual", "[residual]") {

@@ -8,6 +8,13 @@
 /// frequencies give 0. SemanticWeighted (residual/semantic_weighted.hpp)
 /// uses it to decide how much a label disagreement says about a match.
 ///
+/// Agreement is counted as the weight counts it: the same class, or, for the
+/// chance-corrected weight, also two static classes (labels_agree()). Kappa
+/// must measure the relation the weight's a uses: with static classes
+/// merged, a frame that sees nothing but static structure agrees by chance
+/// alone, and its kappa is near 0, so disagreements between finer classes
+/// that a no longer counts do not lift it.
+///
 /// Layering: needs Correspondences (concepts.hpp) and FeatureMap (map/).
 
 #include <algorithm>
@@ -46,6 +53,7 @@ class LabelAgreement {
         ++feature_class_[index(f)];
         ++map_class_[index(g)];
         same_ += f == g ? 1U : 0U;
+        same_or_static_ += f == g || (is_static(f) && is_static(g)) ? 1U : 0U;
         ++pairs_;
       }
     }
@@ -54,30 +62,43 @@ class LabelAgreement {
   /// Pairs counted.
   [[nodiscard]] std::uint64_t pairs() const noexcept { return pairs_; }
 
-  /// Share of pairs with equal labels (0 without pairs).
-  [[nodiscard]] double observed() const noexcept {
-    return pairs_ == 0 ? 0.0 : static_cast<double>(same_) / static_cast<double>(pairs_);
+  /// Share of pairs whose labels agree (equal labels; with
+  /// static_classes_agree also two static classes); 0 without pairs.
+  [[nodiscard]] double observed(bool static_classes_agree = false) const noexcept {
+    if (pairs_ == 0) return 0.0;
+    return static_cast<double>(static_classes_agree ? same_or_static_ : same_) / static_cast<double>(pairs_);
   }
 
   /// Share of pairs expected to agree if the two labels were drawn
-  /// independently from their own class frequencies (0 without pairs).
-  [[nodiscard]] double chance() const noexcept {
+  /// independently from their own class frequencies (with
+  /// static_classes_agree the static classes count as one); 0 without pairs.
+  [[nodiscard]] double chance(bool static_classes_agree = false) const noexcept {
     if (pairs_ == 0) return 0.0;
     const double n = static_cast<double>(pairs_);
     double p = 0.0;
+    // Counts, not shares, are summed: a frame with only static labels then
+    // gets a chance term of exactly 1 (kappa 0), not 1 - rounding.
+    std::uint64_t feature_static = 0;
+    std::uint64_t map_static = 0;
     for (std::size_t c = 0; c < feature_class_.size(); ++c) {
-      p += (static_cast<double>(feature_class_[c]) / n) * (static_cast<double>(map_class_[c]) / n);
+      if (static_classes_agree && is_static(static_cast<Class>(c))) {
+        feature_static += feature_class_[c];
+        map_static += map_class_[c];
+      } else {
+        p += (static_cast<double>(feature_class_[c]) / n) * (static_cast<double>(map_class_[c]) / n);
+      }
     }
-    return p;
+    return p + (static_cast<double>(feature_static) / n) * (static_cast<double>(map_static) / n);
   }
 
-  /// Cohen's kappa (observed - chance) / (1 - chance), clamped to [0, 1].
-  /// 0 when nothing was counted or every label is one class (then agreement
-  /// cannot tell a good match from a bad one).
-  [[nodiscard]] double kappa() const noexcept {
-    const double pe = chance();
+  /// Cohen's kappa (observed - chance) / (1 - chance) of the agreement
+  /// observed(static_classes_agree) counts, clamped to [0, 1]. 0 when
+  /// nothing was counted or every label falls in one agreeing group (then
+  /// agreement cannot tell a good match from a bad one).
+  [[nodiscard]] double kappa(bool static_classes_agree = false) const noexcept {
+    const double pe = chance(static_classes_agree);
     if (pairs_ == 0 || !(pe < 1.0)) return 0.0;
-    return std::clamp((observed() - pe) / (1.0 - pe), 0.0, 1.0);
+    return std::clamp((observed(static_classes_agree) - pe) / (1.0 - pe), 0.0, 1.0);
   }
 
  private:
@@ -89,6 +110,7 @@ class LabelAgreement {
   std::array<std::uint64_t, kNumClasses> feature_class_{};
   std::array<std::uint64_t, kNumClasses> map_class_{};
   std::uint64_t same_ = 0;
+  std::uint64_t same_or_static_ = 0;
   std::uint64_t pairs_ = 0;
 };
 

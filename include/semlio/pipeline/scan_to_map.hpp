@@ -118,8 +118,9 @@ class ScanToMapProblem {
       requires(SurfaceResidual& r) { r.set_label_reliability(1.0); };
 
   /// Cohen's kappa of the last association's corner labels against their
-  /// map points' (map/label_agreement.hpp), as given to the corner residual;
-  /// NaN when no residual uses it.
+  /// map points' (map/label_agreement.hpp), counted as the corner
+  /// residual's weight counts agreement and given to it; NaN when no
+  /// residual uses it.
   [[nodiscard]] double corner_label_reliability() const noexcept { return corner_label_reliability_; }
   /// The same for the surface features.
   [[nodiscard]] double surface_label_reliability() const noexcept { return surface_label_reliability_; }
@@ -209,13 +210,24 @@ class ScanToMapProblem {
     LabelAgreement surface_agreement;
     corner_agreement.add(*corners_, corner_matches_, *corner_map_);
     surface_agreement.add(*surfaces_, surface_matches_, *surface_map_);
-    corner_label_reliability_ = corner_agreement.kappa();
-    surface_label_reliability_ = surface_agreement.kappa();
+    corner_label_reliability_ = corner_agreement.kappa(static_classes_agree(residuals_.corner));
+    surface_label_reliability_ = surface_agreement.kappa(static_classes_agree(residuals_.surface));
     if constexpr (requires(CornerResidual& r) { r.set_label_reliability(1.0); }) {
       residuals_.corner.set_label_reliability(corner_label_reliability_);
     }
     if constexpr (requires(SurfaceResidual& r) { r.set_label_reliability(1.0); }) {
       residuals_.surface.set_label_reliability(surface_label_reliability_);
+    }
+  }
+
+  // Whether residual r's weight counts two static classes as agreeing, so
+  // that its kappa counts agreement the same way (map/label_agreement.hpp).
+  template <typename R>
+  static bool static_classes_agree(const R& r) noexcept {
+    if constexpr (requires { r.static_classes_agree(); }) {
+      return r.static_classes_agree();
+    } else {
+      return false;
     }
   }
 

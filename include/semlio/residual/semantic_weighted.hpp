@@ -14,8 +14,9 @@
 /// the frame's Cohen's kappa between feature labels and matched map labels
 /// (map/label_agreement.hpp; set by the scan-to-map problem after every
 /// association, one for corners and one for surfaces). Exact labels give
-/// kappa near 1 and the paper's weight; labels that agree no better than
-/// chance give kappa 0 and w = 1, the unweighted residual; in between, a
+/// kappa near 1 and the paper's weight where agreement can tell (below);
+/// labels that agree no better than chance give kappa 0 and w = 1, the
+/// unweighted residual; in between, a
 /// disagreement costs as much as the labels have shown they are worth on
 /// this frame. scripts/label_quality_sweep.sh compares the modes from exact
 /// labels to mIoU 0.2 (docs/label_quality.md).
@@ -31,7 +32,12 @@
 /// with the literal eq. 10, the weights alone (`weights_only`) are worse than
 /// no weights on the rural drives of scripts/label_quality_sweep.sh at every
 /// label quality. Only a disagreement that involves a movable class or an
-/// unlabelled point lowers a.
+/// unlabelled point lowers a, and kappa counts agreement the same way
+/// (LabelAgreement::kappa(true)). A frame where movable objects are rare
+/// then has a low kappa even with exact labels, since nearly every pair
+/// agrees by chance, and its weights stay near 1: there a disagreement says
+/// little, and a wrong label costs more than a right one gains (the rural
+/// drives of the sweep).
 
 #include <algorithm>
 #include <cmath>
@@ -93,7 +99,8 @@ class SemanticWeighted {
   explicit SemanticWeighted(R inner = R{}, SemanticWeightConfig config = {}) : inner_(inner), config_(config) {}
 
   /// Sets kappa, the chance-corrected agreement of this frame's labels with
-  /// the map's (LabelAgreement::kappa(), clamped to [0, 1]; NaN counts as 0).
+  /// the map's (LabelAgreement::kappa(static_classes_agree()), clamped to
+  /// [0, 1]; NaN counts as 0).
   /// Until it is set, kappa is 1: the paper's weight.
   void set_label_reliability(double kappa) noexcept {
     reliability_ = std::isfinite(kappa) ? std::clamp(kappa, 0.0, 1.0) : 0.0;
@@ -102,6 +109,13 @@ class SemanticWeighted {
   [[nodiscard]] double label_reliability() const noexcept { return reliability_; }
   /// The settings.
   [[nodiscard]] const SemanticWeightConfig& config() const noexcept { return config_; }
+  /// True when a counts two static classes as agreeing (the chance-corrected
+  /// mode with static_classes_agree); the kappa handed to
+  /// set_label_reliability() should count agreement the same way
+  /// (LabelAgreement::kappa(true)).
+  [[nodiscard]] bool static_classes_agree() const noexcept {
+    return config_.static_classes_agree && config_.mode == SemanticWeightMode::kChanceCorrected;
+  }
 
   /// Switches the weight off (w = 1, whatever the mode) or back on; on
   /// until called. The odometry solves a frame that stays weak with the
@@ -159,8 +173,7 @@ class SemanticWeighted {
   ResidualTerm<kDim> weighted(const FeaturePoint& feature, const MatchedPoints& matches,
                               ResidualTerm<kDim> term) const {
     if (!term.valid) return term;
-    const bool static_agree = config_.static_classes_agree && config_.mode == SemanticWeightMode::kChanceCorrected;
-    const double w = weight(semantic_weight(feature.label, matches, static_agree));
+    const double w = weight(semantic_weight(feature.label, matches, static_classes_agree()));
     term.r *= w;
     term.J_r_xi *= w;
     return term;
