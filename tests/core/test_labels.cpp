@@ -176,6 +176,34 @@ TEST_CASE("labels: static and dynamic sets are exactly METHOD.md eq. 18", "[core
   }
 }
 
+TEST_CASE("labels: labels_agree merges the static classes only when asked", "[core]") {
+  using semlio::labels_agree;
+  // Static with static agrees; movable or unlabelled agrees only with itself.
+  CHECK(labels_agree(Class::kRoad, Class::kSidewalk, true));
+  CHECK(labels_agree(Class::kTrunk, Class::kVegetation, true));
+  CHECK(labels_agree(Class::kTrafficSign, Class::kBuilding, true));
+  CHECK_FALSE(labels_agree(Class::kRoad, Class::kSidewalk, false));
+  CHECK_FALSE(labels_agree(Class::kRoad, Class::kCar, true));
+  CHECK_FALSE(labels_agree(Class::kCar, Class::kTruck, true));
+  CHECK_FALSE(labels_agree(Class::kPerson, Class::kBicyclist, true));
+  CHECK_FALSE(labels_agree(Class::kRoad, Class::kUnlabeled, true));
+  CHECK_FALSE(labels_agree(Class::kUnlabeled, Class::kRoad, true));
+  CHECK(labels_agree(Class::kCar, Class::kCar, true));
+  CHECK(labels_agree(Class::kUnlabeled, Class::kUnlabeled, false));
+  // Every pair: unmerged is equality; merged is symmetric, keeps every
+  // unmerged agreement, and never joins a movable class to another class.
+  for (int i = 0; i < semlio::kNumClasses; ++i) {
+    for (int j = 0; j < semlio::kNumClasses; ++j) {
+      const Class a = semlio::class_from_index(i);
+      const Class b = semlio::class_from_index(j);
+      CHECK(labels_agree(a, b, false) == (a == b));
+      CHECK(labels_agree(a, b, true) == labels_agree(b, a, true));
+      if (a == b) CHECK(labels_agree(a, b, true));
+      if (a != b && (semlio::is_dynamic(a) || a == Class::kUnlabeled)) CHECK_FALSE(labels_agree(a, b, true));
+    }
+  }
+}
+
 TEST_CASE("labels: real SemanticKITTI labels of 50 points of 00/000000", "[core]") {
   // The data README documents the raw classes of these 50 points: building 25,
   // vegetation 17, trunk 3, pole 2, other-structure 1, unlabeled 2.

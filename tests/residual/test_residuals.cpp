@@ -316,20 +316,6 @@ TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label rel
 
 TEST_CASE("Semantic weight: two static classes agree in the chance-corrected mode only", "[residual]") {
   using semlio::SemanticWeightMode;
-  using semlio::labels_agree;
-  // Static with static agrees; movable or unlabelled agrees only with itself.
-  CHECK(labels_agree(Class::kRoad, Class::kSidewalk, true));
-  CHECK(labels_agree(Class::kTrunk, Class::kVegetation, true));
-  CHECK(labels_agree(Class::kTrafficSign, Class::kBuilding, true));
-  CHECK_FALSE(labels_agree(Class::kRoad, Class::kSidewalk, false));
-  CHECK_FALSE(labels_agree(Class::kRoad, Class::kCar, true));
-  CHECK_FALSE(labels_agree(Class::kCar, Class::kTruck, true));
-  CHECK_FALSE(labels_agree(Class::kPerson, Class::kBicyclist, true));
-  CHECK_FALSE(labels_agree(Class::kRoad, Class::kUnlabeled, true));
-  CHECK_FALSE(labels_agree(Class::kUnlabeled, Class::kRoad, true));
-  CHECK(labels_agree(Class::kCar, Class::kCar, true));
-  CHECK(labels_agree(Class::kUnlabeled, Class::kUnlabeled, false));
-
   // A kerb corner: road feature, matches on road, sidewalk, terrain, car, unlabelled.
   const MatchedPoints plane = make_matches({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {2, 0, 0}},
                                            {Class::kRoad, Class::kSidewalk, Class::kTerrain, Class::kCar,

@@ -173,6 +173,13 @@ constexpr bool is_dynamic(Class c) noexcept {
   return id >= static_cast<int>(Class::kCar) && id <= static_cast<int>(Class::kMotorcyclist);
 }
 
+/// True when a map point labelled `match` agrees with a feature labelled
+/// `label` in eq. 10: the same class, or (when static_classes_agree) two
+/// static classes (residual/semantic_weighted.hpp says why).
+constexpr bool labels_agree(Class label, Class match, bool static_classes_agree) noexcept {
+  return match == label || (static_classes_agree && is_static(label) && is_static(match));
+}
+
 /// Class id as a plain integer, for indexing histograms.
 constexpr int index(Class c) noexcept { return static_cast<int>(c); }
 

@@ -9,11 +9,12 @@
 /// uses it to decide how much a label disagreement says about a match.
 ///
 /// Agreement is counted as the weight counts it: the same class, or, for the
-/// chance-corrected weight, also two static classes (labels_agree()). Kappa
-/// must measure the relation the weight's a uses: with static classes
-/// merged, a frame that sees nothing but static structure agrees by chance
-/// alone, and its kappa is near 0, so disagreements between finer classes
-/// that a no longer counts do not lift it.
+/// chance-corrected weight, also two static classes (labels_agree() in
+/// core/labels.hpp). Kappa must measure the relation the weight's a uses:
+/// with static classes merged, a frame that sees nothing but static
+/// structure agrees by chance alone, and its kappa is near 0, so
+/// disagreements between finer classes that a no longer counts do not lift
+/// it.
 ///
 /// Layering: needs Correspondences (concepts.hpp) and FeatureMap (map/).
 
@@ -53,7 +54,7 @@ class LabelAgreement {
         ++feature_class_[index(f)];
         ++map_class_[index(g)];
         same_ += f == g ? 1U : 0U;
-        same_or_static_ += f == g || (is_static(f) && is_static(g)) ? 1U : 0U;
+        same_or_static_ += labels_agree(f, g, true) ? 1U : 0U;
         ++pairs_;
       }
     }

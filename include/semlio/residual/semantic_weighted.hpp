@@ -52,12 +52,6 @@
 
 namespace semlio {
 
-/// True when a map point labelled `match` agrees with a feature labelled
-/// `label`: the same class, or (when static_classes_agree) two static classes.
-constexpr bool labels_agree(Class label, Class match, bool static_classes_agree) noexcept {
-  return match == label || (static_classes_agree && is_static(label) && is_static(match));
-}
-
 /// Eq. 10-12: fraction of the matches whose label agrees with `label`
 /// (labels_agree(); the same class only by default, eq. 10 as written);
 /// 0 without matches.
