@@ -16,9 +16,8 @@
 /// association, one for corners and one for surfaces). Exact labels give
 /// kappa near 1 and the paper's weight where agreement can tell (below);
 /// labels that agree no better than chance give kappa 0 and w = 1, the
-/// unweighted residual; in between, a
-/// disagreement costs as much as the labels have shown they are worth on
-/// this frame. scripts/label_quality_sweep.sh compares the modes from exact
+/// unweighted residual; in between, a disagreement costs as much as the
+/// labels have shown they are worth on this frame. scripts/label_quality_sweep.sh compares the modes from exact
 /// labels to mIoU 0.2 (docs/label_quality.md).
 ///
 /// The chance-corrected weight also counts a match as agreeing when the
