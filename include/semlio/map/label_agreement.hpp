@@ -71,25 +71,25 @@ class LabelAgreement {
   }
 
   /// Share of pairs expected to agree if the two labels were drawn
-  /// independently from their own class frequencies (with
-  /// static_classes_agree the static classes count as one); 0 without pairs.
+  /// independently from their own class frequencies, agreement counted by
+  /// labels_agree(feature, map, static_classes_agree) as observed() counts
+  /// it; 0 without pairs.
   [[nodiscard]] double chance(bool static_classes_agree = false) const noexcept {
     if (pairs_ == 0) return 0.0;
-    const double n = static_cast<double>(pairs_);
-    double p = 0.0;
-    // Counts, not shares, are summed: a frame with only static labels then
-    // gets a chance term of exactly 1 (kappa 0), not 1 - rounding.
-    std::uint64_t feature_static = 0;
-    std::uint64_t map_static = 0;
-    for (std::size_t c = 0; c < feature_class_.size(); ++c) {
-      if (static_classes_agree && is_static(static_cast<Class>(c))) {
-        feature_static += feature_class_[c];
-        map_static += map_class_[c];
-      } else {
-        p += (static_cast<double>(feature_class_[c]) / n) * (static_cast<double>(map_class_[c]) / n);
+    // Counts, not shares, are summed, exactly in integers (a frame has far
+    // fewer than 2^26 pairs): a frame whose labels all agree with each other
+    // then gets a chance term of exactly 1 (kappa 0), not 1 - rounding.
+    std::uint64_t agreeing = 0;
+    for (std::size_t f = 0; f < feature_class_.size(); ++f) {
+      if (feature_class_[f] == 0) continue;
+      for (std::size_t g = 0; g < map_class_.size(); ++g) {
+        if (labels_agree(static_cast<Class>(f), static_cast<Class>(g), static_classes_agree)) {
+          agreeing += feature_class_[f] * map_class_[g];
+        }
       }
     }
-    return p + (static_cast<double>(feature_static) / n) * (static_cast<double>(map_static) / n);
+    const double n = static_cast<double>(pairs_);
+    return static_cast<double>(agreeing) / n / n;
   }
 
   /// Cohen's kappa (observed - chance) / (1 - chance) of the agreement
