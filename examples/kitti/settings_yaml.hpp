@@ -337,6 +337,8 @@ inline const std::map<std::string, Setters>& sections() {
            {"mode", [](Targets& t, const YAML::Node& n) { read_weight_mode(t.s.semantic_weights.mode, n); }},
            {"static_classes_agree",
             [](Targets& t, const YAML::Node& n) { read_value(t.s.semantic_weights.static_classes_agree, n); }},
+           {"disagreement_power",
+            [](Targets& t, const YAML::Node& n) { read_num(t.s.semantic_weights.disagreement_power, n, 1.0, 4.0); }},
        }},
       {"pose_threshold",
        {

@@ -104,6 +104,7 @@ std::map<std::string, Getter> getters() {
              : s.semantic_weights.mode == semlio::SemanticWeightMode::kPaper         ? "paper"
                                                                                      : "off");
   SEMLIO_KEY("semantic_weights.static_classes_agree", s.semantic_weights.static_classes_agree);
+  SEMLIO_KEY("semantic_weights.disagreement_power", s.semantic_weights.disagreement_power);
   SEMLIO_KEY("pose_threshold.translation_threshold_m", s.pose_threshold.translation_threshold_m);
   SEMLIO_KEY("pose_threshold.rotation_threshold_rad", s.pose_threshold.rotation_threshold_rad);
   SEMLIO_KEY("semantic_keyframes.translation_threshold_m", s.semantic_keyframes.translation_threshold_m);

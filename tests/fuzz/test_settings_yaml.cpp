@@ -115,6 +115,14 @@ TEST_CASE("settings YAML: semantic_weights.mode takes its three names, anything 
   CHECK(s.semantic_weights.mode == semlio::SemanticWeightMode::kChanceCorrected);
   CHECK_THAT(config_error("semantic_weights: {static_classes_agree: maybe}\n"),
              Catch::Contains("semantic_weights.static_classes_agree"));
+  REQUIRE(s.semantic_weights.disagreement_power == 2);
+  semlio_examples::parse_settings_yaml("semantic_weights: {disagreement_power: 1}\n", "t.yaml", s);
+  CHECK(s.semantic_weights.disagreement_power == 1);
+  for (const char* bad : {"0", "5", "1.5", "two"}) {
+    INFO(bad);
+    CHECK_THAT(config_error(std::string("semantic_weights: {disagreement_power: ") + bad + "}\n"),
+               Catch::Contains("semantic_weights.disagreement_power"));
+  }
 }
 
 TEST_CASE("settings YAML: a missing, huge or non-regular config file is an IoError", "[fuzz][config]") {

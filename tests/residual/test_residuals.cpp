@@ -12,6 +12,7 @@
 #include <vector>
 
 #include <semlio/concepts.hpp>
+#include <semlio/core/error.hpp>
 #include <semlio/residual/point_to_line.hpp>
 #include <semlio/residual/point_to_plane.hpp>
 #include <semlio/residual/robust.hpp>
@@ -277,12 +278,18 @@ TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label rel
   CHECK(corrected.config().mode == SemanticWeightMode::kChanceCorrected);
   CHECK(weighted_distance(paper) == Approx(0.25 * d));
   CHECK(weighted_distance(off) == Approx(d));
-  // Before any kappa is set the chance-corrected weight is the paper's.
+  // Before any kappa is set, kappa is 1: w = 1 - (1 - a)^2 = 1 - 0.75^2;
+  // with the linear penalty that is the paper's w = a.
   CHECK(corrected.label_reliability() == 1.0);
-  CHECK(weighted_distance(corrected) == Approx(0.25 * d));
-  // w = 1 - kappa (1 - a): kappa 0.6 -> 1 - 0.6 * 0.75 = 0.55.
+  CHECK(weighted_distance(corrected) == Approx(0.4375 * d));
+  WeightedPlane linear(semlio::PointToPlane{}, {.disagreement_power = 1});
+  CHECK(weighted_distance(linear) == Approx(0.25 * d));
+  // w = 1 - kappa (1 - a)^p: kappa 0.6 -> 1 - 0.6 * 0.5625 = 0.6625, and
+  // 1 - 0.6 * 0.75 = 0.55 with p = 1.
   corrected.set_label_reliability(0.6);
-  CHECK(weighted_distance(corrected) == Approx(0.55 * d));
+  linear.set_label_reliability(0.6);
+  CHECK(weighted_distance(corrected) == Approx(0.6625 * d));
+  CHECK(weighted_distance(linear) == Approx(0.55 * d));
   // Labels no better than chance leave the residual unweighted.
   corrected.set_label_reliability(0.0);
   CHECK(weighted_distance(corrected) == Approx(d));
@@ -299,7 +306,7 @@ TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label rel
   CHECK(weighted_distance(paper_k) == Approx(0.25 * d));
   // Weights switched off (the odometry's baseline-like re-solve of a weak
   // frame): w = 1 in every mode until switched back on.
-  for (WeightedPlane w : {paper, corrected}) {
+  for (WeightedPlane w : {paper, linear}) {
     w.set_label_reliability(1.0);
     REQUIRE(w.weights_enabled());
     const double on_distance = weighted_distance(w);
@@ -331,11 +338,11 @@ TEST_CASE("Semantic weight: two static classes agree in the chance-corrected mod
   WeightedPlane corrected;  // the defaults: chance-corrected, static classes agree
   CHECK(corrected.config().static_classes_agree);
   corrected.set_label_reliability(0.5);
-  CHECK(weighted_distance(corrected) == Approx((1.0 - 0.5 * 0.4) * d));  // a = 0.6
+  CHECK(weighted_distance(corrected) == Approx((1.0 - 0.5 * 0.4 * 0.4) * d));  // a = 0.6
   WeightedPlane literal(semlio::PointToPlane{}, {.mode = SemanticWeightMode::kChanceCorrected,
                                                  .static_classes_agree = false});
   literal.set_label_reliability(0.5);
-  CHECK(weighted_distance(literal) == Approx((1.0 - 0.5 * 0.8) * d));  // a = 0.2
+  CHECK(weighted_distance(literal) == Approx((1.0 - 0.5 * 0.8 * 0.8) * d));  // a = 0.2
   // The paper's mode keeps eq. 10 as written whatever the flag says.
   const WeightedPlane paper(semlio::PointToPlane{}, {.mode = SemanticWeightMode::kPaper});
   REQUIRE(paper.config().static_classes_agree);
@@ -344,6 +351,29 @@ TEST_CASE("Semantic weight: two static classes agree in the chance-corrected mod
   CHECK(corrected.static_classes_agree());
   CHECK_FALSE(literal.static_classes_agree());
   CHECK_FALSE(paper.static_classes_agree());
+}
+
+TEST_CASE("Semantic weight: a disagreement costs kappa (1 - a)^p", "[residual]") {
+  WeightedPlane w;
+  REQUIRE(w.config().disagreement_power == 2);
+  w.set_label_reliability(0.5);
+  // Every match disagrees: the whole penalty kappa, whatever p is.
+  CHECK(w.weight(0.0) == Approx(0.5));
+  CHECK(w.weight(1.0) == 1.0);
+  // One of five disagrees: 0.5 * 0.2^2, a fifth of the linear penalty.
+  CHECK(w.weight(0.8) == Approx(1.0 - 0.5 * 0.04));
+  for (int p = 1; p <= 4; ++p) {
+    WeightedPlane wp(semlio::PointToPlane{}, {.disagreement_power = p});
+    wp.set_label_reliability(0.5);
+    CHECK(wp.weight(0.0) == Approx(0.5));
+    CHECK(wp.weight(0.4) == Approx(1.0 - 0.5 * std::pow(0.6, p)));
+  }
+  // The paper's mode keeps w = a.
+  const WeightedPlane paper(semlio::PointToPlane{}, {.mode = semlio::SemanticWeightMode::kPaper});
+  CHECK(paper.weight(0.4) == Approx(0.4));
+  for (const int bad : {0, -1, 5}) {
+    CHECK_THROWS_AS(WeightedPlane(semlio::PointToPlane{}, {.disagreement_power = bad}), semlio::ConfigError);
+  }
 }
 
 TEST_CASE("Robust kernels give the IRLS weight of the current residual", "[residual]") {
