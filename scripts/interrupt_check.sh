@@ -22,6 +22,7 @@ if [ -z "${SKIP_BUILD:-}" ]; then
 fi
 RUN="$BUILD_DIR/examples/semlio_run"
 rm -rf "$OUT"
+mkdir -p "$(dirname "$OUT")"  # the logs sit next to OUT
 set +e
 SEMLIO_INTERRUPT_AFTER_FRAMES=$FRAMES "$RUN" --input "$IN" --out "$OUT" --labels none --quiet > "$OUT.log" 2>&1
 rc=$?
