@@ -159,7 +159,7 @@ for line in open(f"{out}/rows.tsv"):
 print(f"Simulated drives of {frames} frames, seeds {', '.join(seeds)} (each seed another world and drive); "
       "every cell is the mean over the seeds. `labels`: the predictions' target mIoU and, in brackets, "
       "the measured one (exact: the simulator's own labels). `full` uses the chance-corrected weights "
-      "(the default: two static classes agree), `full_paper` the paper's w = a with eq. 10 as written.")
+      "(the default: two static classes agree, w = 1 - kappa (1 - a)^2), `full_paper` the paper's w = a with eq. 10 as written.")
 print()
 print("| world | labels | kappa corners / surfaces | " + " | ".join(configs) + " |")
 print("|---|---|---|" + "---|" * len(configs))
