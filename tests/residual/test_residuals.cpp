@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include <semlio/concepts.hpp>
@@ -306,7 +307,8 @@ TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label rel
   CHECK(weighted_distance(paper_k) == Approx(0.25 * d));
   // Weights switched off (the odometry's baseline-like re-solve of a weak
   // frame): w = 1 in every mode until switched back on.
-  for (WeightedPlane w : {paper, linear}) {
+  // The default mode too (kappa 1: w = 1 - 0.75^2).
+  for (auto [w, on_weight] : {std::pair{paper, 0.25}, std::pair{linear, 0.25}, std::pair{corrected, 0.4375}}) {
     w.set_label_reliability(1.0);
     REQUIRE(w.weights_enabled());
     const double on_distance = weighted_distance(w);
@@ -317,7 +319,7 @@ TEST_CASE("Semantic weight modes: chance-corrected shrinks toward 1 as label rel
     CHECK(term.J_r_xi == semlio::PointToPlane{}.evaluate(f, plane, SE3d()).J_r_xi);
     w.set_weights_enabled(true);
     CHECK(weighted_distance(w) == on_distance);
-    CHECK(on_distance == Approx(0.25 * d));
+    CHECK(on_distance == Approx(on_weight * d));
   }
 }
 
