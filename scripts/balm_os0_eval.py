@@ -14,6 +14,8 @@ import json
 import math
 import sys
 
+from kitti_poses import pose_inv, pose_mul
+
 
 def read_poses(path):
     poses = []
@@ -26,16 +28,6 @@ def read_poses(path):
                 sys.exit(f"{path}: expected 12 numbers per line, got {len(v)}")
             poses.append([v[0:4], v[4:8], v[8:12], [0.0, 0.0, 0.0, 1.0]])
     return poses
-
-
-def mul(a, b):
-    return [[sum(a[i][k] * b[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
-
-
-def inv(a):
-    r = [[a[j][i] for j in range(3)] for i in range(3)]
-    t = [-sum(r[i][k] * a[k][3] for k in range(3)) for i in range(3)]
-    return [r[0] + [t[0]], r[1] + [t[1]], r[2] + [t[2]], [0.0, 0.0, 0.0, 1.0]]
 
 
 def angle_deg(a):
@@ -103,8 +95,8 @@ def main():
             facts[k] = v
     if len(est) != len(ref) or len(status) != len(ref):
         sys.exit(f"{len(ref)} reference poses, {len(est)} estimated, {len(status)} statuses")
-    base = inv(ref[0])
-    ref = [mul(base, r) for r in ref]
+    base = pose_inv(ref[0])
+    ref = [pose_mul(base, r) for r in ref]
 
     print("sensor:", ", ".join(f"{k}={v}" for k, v in facts.items()))
     counts = {}
@@ -113,7 +105,7 @@ def main():
     print("statuses:", " ".join(f"{k}={v}" for k, v in sorted(counts.items())))
     dt, dr = [], []
     for i in range(1, len(ref)):
-        e = mul(inv(mul(inv(ref[i - 1]), ref[i])), mul(inv(est[i - 1]), est[i]))
+        e = pose_mul(pose_inv(pose_mul(pose_inv(ref[i - 1]), ref[i])), pose_mul(pose_inv(est[i - 1]), est[i]))
         dt.append(norm3(e))
         dr.append(angle_deg(e))
     ate = horn_ate(est, ref)

@@ -27,6 +27,11 @@
 #   KITTI_ROOT=DIR       a KITTI odometry sequence dataset/sequences/NN
 #                        (velodyne/, calib.txt, times.txt; ground truth as
 #                        semlio_kitti finds it); KITTI_FRAMES=N caps its length.
+#   BALM_OS0=DIR         the BALM hand-held OS0-class keyframes (velodyne/,
+#                        poses.txt, times.txt), read by semlio_run with the
+#                        detected beam table and the hand-held motion profile
+#                        (sensor: {profile: auto, platform: hand_held}); their
+#                        reference poses are BALM's odometry, not ground truth.
 #   BAGS="FILE ..."      your recordings (ROS 1 bag, MCAP, rosbag2 .db3), read by
 #                        semlio_run with its sensor detection (no reference:
 #                        path length and frame time only). Both runs, quick and
@@ -203,6 +208,15 @@ if [[ $QUICK == 0 ]]; then
         > "$OUT/lio/$name.txt" 2>&1 || { cat "$OUT/lio/$name.txt" >&2; exit 1; }
     fi
   fi
+  if [[ -n "${BALM_OS0:-}" ]] && wanted balm_os0; then
+    # A KITTI-layout folder of another sensor: semlio_run (not semlio_kitti)
+    # reads it, so that the beam table is detected rather than KITTI's assumed.
+    printf 'sensor: {profile: auto, platform: hand_held}\n' > "$OUT/configs/balm_os0.sensor.yaml"
+    printf '%s\n' --format kitti --sensor "$OUT/configs/balm_os0.sensor.yaml" --kitti-correction off \
+      > "$OUT/configs/balm_os0.args"
+    printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' balm_os0 "${BALM_OS0%/}" real "hand-held OS0-class keyframes (BALM)" \
+      geometric - "BALM odometry (not ground truth; cm-consistent)" >> "$DS"
+  fi
   if [[ -n "${KITTI_ROOT:-}" ]] && wanted "kitti_$(basename "${KITTI_ROOT%/}")"; then
     printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "kitti_$(basename "${KITTI_ROOT%/}")" "${KITTI_ROOT%/}" real \
       "KITTI odometry $(basename "${KITTI_ROOT%/}")" geometric - "KITTI ground truth" >> "$DS"
@@ -222,8 +236,10 @@ while IFS=$'\t' read -r name dir kind scene labels extra ref; do
     # Both files are YAML maps; "{}" plus a second map is not one: drop it.
     sed -i '/^{}$/d' "$cfg"
     [[ -s "$cfg" ]] || echo "{}" > "$cfg"
-    # A folder is a KITTI layout (semlio_kitti); a file is a recording (semlio_run).
-    if [[ -f "$dir" ]]; then
+    # A folder is a KITTI layout (semlio_kitti); a file is a recording, and a
+    # folder with semlio_run options (configs/NAME.args) another sensor's
+    # KITTI layout (semlio_run).
+    if [[ -f "$dir" || -f "$OUT/configs/$name.args" ]]; then
       tool=(semlio_run --input "$dir")
       while read -r a; do [[ -n "$a" ]] && tool+=("$a"); done < "$OUT/configs/$name.args"
     else

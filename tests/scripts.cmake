@@ -36,6 +36,10 @@ semlio_add_script_test(segmenter_miou ${SEMLIO_BASH} scripts/segmenter_miou.sh 2
 semlio_add_script_test(reproduce_quick ${SEMLIO_BASH} scripts/reproduce.sh --quick --check)
 # ~1 min on an idle 2-core machine; 16 min measured while eight builds shared it.
 set_tests_properties(script_reproduce_quick PROPERTIES TIMEOUT 1800)
+# The rule behind results.md's real-drive resolution table: the alignment
+# against numpy's SVD, and worse / better / not resolved on known cases.
+# (/usr/bin/python3: the interpreter reproduce.sh runs its report with.)
+semlio_add_script_test(ate_resolution /usr/bin/python3 scripts/ate_resolution.py --self-test)
 # Batch runs over two small drives (the real 2-scan KITTI sequence and a
 # 6-frame simulated one); both must complete and land in the table. (No ';'
 # in the command: CMake would split it into several arguments.)
