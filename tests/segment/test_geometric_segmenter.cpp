@@ -271,9 +271,10 @@ namespace {
 // `side_m` off the street's edges); points with y below `kerb_right_y` or
 // above `kerb_left_y` are raised by `kerb_m` (sidewalks). The road falls
 // away from y = 0 by `cross_fall` (rise over run) to both sides (a crowned
-// road); the sidewalks start from the road's height at their kerbs.
+// road) and rises ahead by `grade`; the sidewalks start from the road's
+// height at their kerbs.
 void add_ground(semlio::Scan& scan, float reach_m, float kerb_right_y = -1e9F, float kerb_left_y = 1e9F,
-                float kerb_m = 0.0F, float side_m = 1e9F, float cross_fall = 0.0F) {
+                float kerb_m = 0.0F, float side_m = 1e9F, float cross_fall = 0.0F, float grade = 0.0F) {
   const float ground_z = -static_cast<float>(semlio_test::kSceneSensorHeight);
   for (float x = -reach_m; x <= reach_m; x += 0.2F) {
     for (float y = -reach_m; y <= reach_m; y += 0.2F) {
@@ -281,7 +282,7 @@ void add_ground(semlio::Scan& scan, float reach_m, float kerb_right_y = -1e9F, f
       if (std::hypot(x, y) < 3.7F) continue;
       const bool raised = y < kerb_right_y || y > kerb_left_y;
       const float road_y = std::clamp(y, kerb_right_y, kerb_left_y);  // the road's edge under a sidewalk
-      scan.points.emplace_back(x, y, ground_z - cross_fall * std::fabs(road_y) + (raised ? kerb_m : 0.0F));
+      scan.points.emplace_back(x, y, ground_z - cross_fall * std::fabs(road_y) + grade * x + (raised ? kerb_m : 0.0F));
       scan.labels.push_back(raised ? Class::kSidewalk : Class::kRoad);
     }
   }
@@ -300,9 +301,14 @@ TEST_CASE("GeometricSegmenter finds the sidewalk beside a vehicle driving close 
   // street), a plane through the lane misses the road's edges by 0.08-0.13 m
   // and the sidewalks stand only 0.02-0.07 m above it: the walk outwards
   // takes them for road; the kerbs crossed along the nearest rings find them.
+  // On a street that climbs or falls (1 %), a ring beside the vehicle meets
+  // the road at its two kerb crossings 0.1 m apart in height: coming down the
+  // far kerb it is back at road height only as the lane's grade says, and
+  // otherwise stays "raised" across the road ahead of the vehicle.
   const float cross_fall = GENERATE(0.0F, 0.03F);
+  const float grade = GENERATE(0.0F, 0.01F, -0.01F);
   semlio::Scan scan;
-  add_ground(scan, 14.0F, -2.8F, 4.2F, 0.15F, 4.0F, cross_fall);
+  add_ground(scan, 14.0F, -2.8F, 4.2F, 0.15F, 4.0F, cross_fall, grade);
   const std::vector<Class> truth = scan.labels;
   semlio::GeometricSegmenter().segment(scan);
   std::size_t sidewalk = 0, sidewalk_ok = 0, road = 0, road_ok = 0;
@@ -317,7 +323,7 @@ TEST_CASE("GeometricSegmenter finds the sidewalk beside a vehicle driving close 
       road_ok += scan.labels[i] == Class::kRoad ? 1U : 0U;
     }
   }
-  INFO("cross fall " << cross_fall << ": " << sidewalk_ok << " / " << sidewalk << " sidewalk, " << road_ok << " / " << road
+  INFO("cross fall " << cross_fall << ", grade " << grade << ": " << sidewalk_ok << " / " << sidewalk << " sidewalk, " << road_ok << " / " << road
                      << " road");
   REQUIRE(sidewalk > 300);
   REQUIRE(road > 300);

@@ -14,9 +14,9 @@
 ///    not told apart); past a curb step up it is sidewalk, past a step down
 ///    (a verge) or more than `sidewalk_width_m` behind the curb it is
 ///    terrain. Road bins between a kerb step up and a step (or a ramp of at
-///    most 2 m) back down along the same ring of range bins, within 20 m,
-///    are sidewalk too: beside a vehicle near the kerb, or on a crowned road,
-///    the walk outwards never sees the kerb. With `split_ground = false` all
+///    most 2 m) back down along the same ring of range bins, walked both
+///    ways round, within 20 m, are sidewalk too: beside a vehicle near the
+///    kerb, or on a crowned road, the walk outwards never sees the kerb. With `split_ground = false` all
 ///    ground is kRoad (one ground class, as the issue allows).
 /// 2. Objects (detail/obstacle_grid.hpp): the other points go into a 2D grid
 ///    (0.4 m cells) with per-cell heights above ground, grouped into
