@@ -585,6 +585,30 @@ def page(datasets, run_dir, mode, made, seconds):
     return "\n".join(L).rstrip() + "\n"
 
 
+def segmenter_summary(run_dir):
+    """The mIoU rows of segmenter_iou.md's per-class table (real scans pooled, then each simulated world)."""
+    path = os.path.join(run_dir, "segmenter_iou.md")
+    if not os.path.exists(path):
+        return []
+    head, rows = None, {}
+    for line in open(path):
+        line = line.rstrip("\n")
+        if line.startswith("| class | real"):
+            head = line
+        elif head and line.startswith("| **mIoU** |"):
+            rows["19-class mIoU"] = line
+        elif head and line.startswith("| **coarse mIoU** |"):
+            rows["coarse-class mIoU"] = line
+    if not head or len(rows) != 2:
+        return []
+    cols = [c.strip() for c in head.strip("|").split("|")][1:]
+    out = ["| labels | " + " | ".join(cols) + " |", "|---|" + "---|" * len(cols)]
+    for name, line in rows.items():
+        cells = [c.strip().strip("*") for c in line.strip("|").split("|")][1:]
+        out.append(f"| {name} | " + " | ".join(cells) + " |")
+    return out
+
+
 def update_readme(path, datasets, run_dir):
     text = open(path).read()
     if README_BEGIN not in text or README_END not in text:
@@ -597,6 +621,12 @@ def update_readme(path, datasets, run_dir):
         lines += ["", "On the real drives, each part's ATE minus `baseline`'s +- its standard error over bootstrap "
                   "resamples of the frames; worse (bold) or better only where the difference is at least twice "
                   "its standard error ([docs/results.md](docs/results.md), Table 3):", ""] + res
+    seg = segmenter_summary(run_dir)
+    if seg:
+        lines += ["", "The labels of the real runs come from `GeometricSegmenter` (geometry only, no network); its "
+                  "mIoU against SemanticKITTI's ground truth on the two real KITTI 00 scans of `tests/data` "
+                  "(pooled) and against the simulator's exact labels per world ([docs/results.md](docs/results.md), "
+                  "segmenter IoU):", ""] + seg
     lio = lio_real_table(run_dir)
     if lio:
         lines += ["", "Lidar-inertial on the real KITTI raw drive (its 10 Hz OXTS IMU against lidar only; end point: "
