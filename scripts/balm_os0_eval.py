@@ -14,6 +14,7 @@ import json
 import math
 import sys
 
+from ate_resolution import aligned_rmse
 from kitti_poses import pose_inv, pose_mul
 
 
@@ -49,38 +50,6 @@ def median(v):
     return s[n // 2] if n % 2 else 0.5 * (s[n // 2 - 1] + s[n // 2])
 
 
-def horn_ate(est, ref):
-    """RMSE of reference positions vs estimated positions after the best rigid motion."""
-    p = [[e[i][3] for i in range(3)] for e in est]
-    q = [[r[i][3] for i in range(3)] for r in ref]
-    n = len(p)
-    pc = [sum(x[i] for x in p) / n for i in range(3)]
-    qc = [sum(x[i] for x in q) / n for i in range(3)]
-    s = [[sum((p[k][i] - pc[i]) * (q[k][j] - qc[j]) for k in range(n)) for j in range(3)] for i in range(3)]
-    (sxx, sxy, sxz), (syx, syy, syz), (szx, szy, szz) = s
-    nm = [[sxx + syy + szz, syz - szy, szx - sxz, sxy - syx],
-          [syz - szy, sxx - syy - szz, sxy + syx, szx + sxz],
-          [szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy],
-          [sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz]]
-    shift = sum(abs(x) for row in nm for x in row) + 1.0  # positive definite: power iteration finds the largest
-    m = [[nm[i][j] + (shift if i == j else 0.0) for j in range(4)] for i in range(4)]
-    v = [1.0, 0.1, 0.1, 0.1]
-    for _ in range(2000):
-        w = [sum(m[i][j] * v[j] for j in range(4)) for i in range(4)]
-        l = math.sqrt(sum(x * x for x in w))
-        v = [x / l for x in w]
-    a, b, c, d = v
-    r = [[a * a + b * b - c * c - d * d, 2 * (b * c - a * d), 2 * (b * d + a * c)],
-         [2 * (b * c + a * d), a * a - b * b + c * c - d * d, 2 * (c * d - a * b)],
-         [2 * (b * d - a * c), 2 * (c * d + a * b), a * a - b * b - c * c + d * d]]
-    t = [qc[i] - sum(r[i][k] * pc[k] for k in range(3)) for i in range(3)]
-    err2 = 0.0
-    for k in range(n):
-        y = [sum(r[i][j] * p[k][j] for j in range(3)) + t[i] for i in range(3)]
-        err2 += sum((y[i] - q[k][i]) ** 2 for i in range(3))
-    return math.sqrt(err2 / n)
-
-
 def main():
     if len(sys.argv) not in (5, 6):
         sys.exit(__doc__)
@@ -108,7 +77,7 @@ def main():
         e = pose_mul(pose_inv(pose_mul(pose_inv(ref[i - 1]), ref[i])), pose_mul(pose_inv(est[i - 1]), est[i]))
         dt.append(norm3(e))
         dr.append(angle_deg(e))
-    ate = horn_ate(est, ref)
+    ate = aligned_rmse([[e[i][3] for i in range(3)] for e in est], [[q[i][3] for i in range(3)] for q in ref])
     print(f"keyframe-to-keyframe difference to the reference: median {median(dt) * 100:.2f} cm / "
           f"{median(dr):.3f} deg, max {max(dt) * 100:.2f} cm / {max(dr):.3f} deg")
     print(f"ATE (SE(3) alignment, {len(ref)} keyframes): RMSE {ate:.4f} m")

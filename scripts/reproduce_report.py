@@ -257,6 +257,20 @@ def summary(datasets, mode):
     return rows
 
 
+def camera_tr(ds):
+    """The dataset's Tr (velodyne -> camera 0, 4x4 rows) when its runs wrote
+    camera-frame poses (report.json frame "camera0"), else None."""
+    calib = os.path.join(ds["dir"], "calib.txt")
+    if ds["runs"]["full"]["report"].get("frame") != "camera0" or not os.path.exists(calib):
+        return None
+    with open(calib) as f:
+        for line in f:
+            if line.startswith("Tr:"):
+                v = [float(x) for x in line.split()[1:13]]
+                return [v[0:4], v[4:8], v[8:12], [0.0, 0.0, 0.0, 1.0]]
+    return None
+
+
 def evaluated_positions(ds, c):
     """(reference, estimate) positions as the evaluator compares them: lidar
     frame (camera-frame files converted with the dataset's Tr, as
@@ -270,18 +284,11 @@ def evaluated_positions(ds, c):
     ref = read_kitti_poses(ds["gt"])[first:first + len(est)]
     if len(ref) != len(est) or get(rep, "evaluation", "ate_all_frames", "count") != len(est):
         return None
-    calib = os.path.join(ds["dir"], "calib.txt")
-    if rep.get("frame") == "camera0" and os.path.exists(calib):
-        Tr = None
-        with open(calib) as f:
-            for line in f:
-                if line.startswith("Tr:"):
-                    v = [float(x) for x in line.split()[1:13]]
-                    Tr = [v[0:4], v[4:8], v[8:12], [0.0, 0.0, 0.0, 1.0]]
-        if Tr is not None:
-            Ti = pose_inv(Tr)
-            est = [pose_mul(pose_mul(Ti, p), Tr) for p in est]
-            ref = [pose_mul(pose_mul(Ti, p), Tr) for p in ref]
+    Tr = camera_tr(ds)
+    if Tr is not None:
+        Ti = pose_inv(Tr)
+        est = [pose_mul(pose_mul(Ti, p), Tr) for p in est]
+        ref = [pose_mul(pose_mul(Ti, p), Tr) for p in ref]
     est = [[p[0][3], p[1][3], p[2][3]] for p in est]
     ref = [[p[0][3], p[1][3], p[2][3]] for p in ref]
     mine, theirs = ate_resolution.aligned_rmse(est, ref), ate(ds, c)
@@ -345,17 +352,10 @@ def lidar_poses(path, ds):
     """4x4 numpy poses in the lidar frame (camera-frame files converted with the dataset's Tr)."""
     import numpy as np
     P = [np.array(p) for p in read_kitti_poses(path)]
-    calib = os.path.join(ds["dir"], "calib.txt")
-    if ds["runs"]["full"]["report"].get("frame") != "camera0" or not os.path.exists(calib):
-        return P
-    Tr = None
-    with open(calib) as f:
-        for line in f:
-            if line.startswith("Tr:"):
-                v = [float(x) for x in line.split()[1:13]]
-                Tr = np.vstack([np.array(v).reshape(3, 4), [0, 0, 0, 1]])
+    Tr = camera_tr(ds)
     if Tr is None:
         return P
+    Tr = np.array(Tr)
     Ti = np.linalg.inv(Tr)
     return [Ti @ p @ Tr for p in P]
 
